@@ -1,0 +1,88 @@
+"""Summary figures of a simulated run (what ``chainmodel run`` prints)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["steady_window", "dominant_frequency", "tooth_ratio", "summarise"]
+
+
+def steady_window(time: np.ndarray, ramp_time: float, duration: float) -> np.ndarray:
+    """Mask of the samples treated as steady state: after the ramp and after the first half of
+    the run (start-up transients of the dynamic levels have decayed by then for the presets)."""
+    start = max(ramp_time, 0.5 * duration)
+    mask = time >= start - 1e-12
+    if mask.sum() < 8:
+        mask = np.zeros_like(time, bool)
+        mask[-max(8, len(time) // 2):] = True
+    return mask
+
+
+def dominant_frequency(time: np.ndarray, signal: np.ndarray) -> tuple[float, float]:
+    """Frequency [Hz] of the largest spectral peak of ``signal`` (mean removed, Hann window) and
+    the FFT bin width [Hz]. Returns (nan, bin) for a constant signal."""
+    n = len(signal)
+    if n < 4:
+        return math.nan, math.nan
+    dt = float(np.mean(np.diff(time)))
+    x = (signal - np.mean(signal)) * np.hanning(n)
+    spec = np.abs(np.fft.rfft(x))
+    freqs = np.fft.rfftfreq(n, dt)
+    spec[0] = 0.0
+    if not np.any(spec > 1e-12 * max(1.0, float(np.max(np.abs(signal))))):
+        return math.nan, 1.0 / (n * dt)
+    return float(freqs[int(np.argmax(spec))]), 1.0 / (n * dt)
+
+
+def tooth_ratio(driver_angle: np.ndarray, driven_angle: np.ndarray, n_driver: int) -> float:
+    """Driven / driver rotation over the largest whole number of driver tooth periods in the
+    samples (so the tooth-periodic transmission error cancels); nan if less than one period
+    or if the driver does not turn monotonically."""
+    period = 2 * math.pi / n_driver
+    span = driver_angle[-1] - driver_angle[0]
+    k = math.floor(abs(span) / period + 1e-9)
+    if k < 1 or not (np.all(np.diff(driver_angle) > 0) or np.all(np.diff(driver_angle) < 0)):
+        return math.nan
+    sign = 1.0 if span > 0 else -1.0
+    order = np.argsort(driver_angle)
+    end = driver_angle[0] + sign * k * period
+    phi2_end = float(np.interp(end, driver_angle[order], driven_angle[order]))
+    return (phi2_end - float(driven_angle[0])) / (sign * k * period)
+
+
+def summarise(result) -> dict:
+    """Key figures of a :class:`chainmodel.simulation.Result` (SI units, snake_case keys)."""
+    t = result.time
+    scene = result.scene
+    mask = steady_window(t, scene.operating.ramp_time, t[-1])
+    tight, slack = result["tight_span.tension"][mask], result["slack_span.tension"][mask]
+    phi1, phi2 = result["driver.angle"][mask], result["driven.angle"][mask]
+    drive = scene.drive
+    freq, df = dominant_frequency(t[mask], result["driven.speed"][mask])
+    mean_speed = float(np.mean(result["driver.speed"][mask]))
+    out = {
+        "scene": scene.name,
+        "fidelity": result.fidelity_name,
+        "duration_s": float(t[-1]),
+        "steady_from_s": float(t[mask][0]),
+        "input_speed_rpm": scene.operating.speed * 60 / (2 * math.pi),
+        "load_torque_nm": scene.operating.load_torque,
+        "static_span_tension_n": result.static_tension,
+        "mean_tight_tension_n": float(np.mean(tight)),
+        "peak_tight_tension_n": float(np.max(tight)),
+        "mean_slack_tension_n": float(np.mean(slack)),
+        "peak_slack_tension_n": float(np.max(slack)),
+        "mean_input_torque_nm": float(np.mean(result["input_shaft.torque"][mask])),
+        "tooth_ratio": tooth_ratio(phi1, phi2, drive.n_driver),
+        "exact_tooth_ratio": drive.n_driver / drive.n_driven,
+        "mean_driven_speed_rad_s": float(np.mean(result["driven.speed"][mask])),
+        "driven_speed_ripple_rms_rad_s": float(np.std(result["driven.speed"][mask])),
+        "dominant_frequency_hz": freq,
+        "frequency_resolution_hz": df,
+        "meshing_frequency_hz": abs(mean_speed) * drive.n_driver / (2 * math.pi),
+        "wall_time_s": result.wall_time,
+        "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else math.inf,
+    }
+    return out

@@ -1,0 +1,11 @@
+"""Kinematics of the chain drive: the tight-span four-bar (seed 000), its closed-form
+approximations, continuous sprocket rotations, and both spans' wrapping length (seed 004)."""
+
+from .fourbar import Configuration, Kinematics, exact, release, seating
+from .rotation import Rotation, driven_rotation
+from .wrapping import (centre_distance_for_links, chain_geometry, roller_positions, wrap_length,
+                       wrap_length_range)
+
+__all__ = ["Configuration", "Kinematics", "exact", "release", "seating", "Rotation",
+           "driven_rotation", "chain_geometry", "roller_positions", "wrap_length",
+           "wrap_length_range", "centre_distance_for_links"]

@@ -1,0 +1,20 @@
+"""The fidelity ladder: every level implements :class:`chainmodel.models.base.Model`."""
+
+from .base import (ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, Inputs, Model, OutputSpec,
+                   SimulationDiverged)
+from .kinematic import KinematicModel
+
+__all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "OutputSpec",
+           "SimulationDiverged", "KinematicModel", "MODEL_CLASSES", "model_class"]
+
+#: level -> model class; levels register here as they are implemented
+MODEL_CLASSES: dict[int, type[Model]] = {0: KinematicModel}
+
+
+def model_class(level: int) -> type[Model]:
+    from ..parameters import FIDELITY_NAMES
+    if level not in MODEL_CLASSES:
+        raise ValueError(f"fidelity level {level} ({FIDELITY_NAMES[level]}) is not available in "
+                         f"this version; available: "
+                         + ", ".join(f"{k} ({FIDELITY_NAMES[k]})" for k in sorted(MODEL_CLASSES)))
+    return MODEL_CLASSES[level]

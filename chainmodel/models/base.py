@@ -1,0 +1,193 @@
+"""The one interface every fidelity level implements.
+
+A model is a first-order ODE system dx/dt = f(t, x, u) (no states at level 0) driven by the
+three inputs of the FMU contract, and a map from (t, x, u) to the outputs of DESIGN.md. The
+steppers in :mod:`chainmodel.integrate` only ever talk to this interface, so any level runs with
+any stepper, in the library, in the CLI and inside the FMU.
+
+Sign conventions (DESIGN.md): angles and speeds are positive in the forward direction (the input
+shaft turning positively drives the chain forward; the span the driver pulls is the tight span).
+``load.torque`` opposes forward motion of the driven sprocket when positive. ``input_shaft.torque``
+is the torque the drive takes from the input shaft (what a master feeds back to a motor model).
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from ..geometry import Drive
+
+__all__ = ["Inputs", "OutputSpec", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "ALL_OUTPUTS", "Model",
+           "SimulationDiverged", "quasi_static_extras", "QUASI_STATIC"]
+
+
+class SimulationDiverged(RuntimeError):
+    """The integration left the physically meaningful range (non-finite or runaway state).
+
+    The message says when, in which quantity, and what to try."""
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """The three FMU inputs, plus the input shaft's angular acceleration where it is known
+    (an analytic speed profile; the FMU estimates it by backward difference of the speed)."""
+
+    angle: float = 0.0         # input_shaft.angle [rad]
+    speed: float = 0.0         # input_shaft.speed [rad/s]
+    torque: float = 0.0        # load.torque [N.m]
+    acceleration: float = 0.0  # d(speed)/dt [rad/s^2]
+
+    def hold(self, dt: float) -> "Inputs":
+        """First-order hold over a communication step: the angle advances at the held speed."""
+        return replace(self, angle=self.angle + self.speed * dt)
+
+    def check(self) -> "Inputs":
+        for name, value in (("input_shaft.angle", self.angle), ("input_shaft.speed", self.speed),
+                            ("load.torque", self.torque),
+                            ("input_shaft.acceleration", self.acceleration)):
+            if not math.isfinite(value):
+                raise ValueError(f"input {name} must be finite, got {value!r}")
+        return self
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    name: str
+    unit: str
+    description: str
+
+
+CORE_OUTPUTS: tuple[OutputSpec, ...] = (
+    OutputSpec("driver.angle", "rad", "driver sprocket rotation, forward positive"),
+    OutputSpec("driver.speed", "rad/s", "driver sprocket angular speed"),
+    OutputSpec("driven.angle", "rad", "driven sprocket rotation, forward positive"),
+    OutputSpec("driven.speed", "rad/s", "driven sprocket angular speed"),
+    OutputSpec("driven.acceleration", "rad/s2", "driven sprocket angular acceleration"),
+    OutputSpec("input_shaft.torque", "N.m",
+               "torque the drive takes from the input shaft (feed back to the motor)"),
+    OutputSpec("tight_span.tension", "N", "tension of the span the driver pulls"),
+    OutputSpec("slack_span.tension", "N", "tension of the return span"),
+    OutputSpec("tight_span.length", "m", "distance between the tight span's endpoint rollers"),
+    OutputSpec("velocity_ratio", "", "driven speed / driver speed (instantaneous)"),
+    OutputSpec("transmission_error", "rad",
+               "driven angle minus the mean-ratio angle (n_driver / n_driven) * driver angle"),
+)
+
+EXTRA_OUTPUTS: tuple[OutputSpec, ...] = (
+    OutputSpec("tight_span.midspan_deflection", "m",
+               "transverse deflection of the tight span at its middle, from the straight line "
+               "between its endpoints (positive away from the line of centres)"),
+    OutputSpec("chain.max_link_tension", "N", "largest link tension in the chain"),
+    OutputSpec("contact.max_force", "N", "largest roller-tooth contact force"),
+)
+
+ALL_OUTPUTS: tuple[OutputSpec, ...] = CORE_OUTPUTS + EXTRA_OUTPUTS
+
+QUASI_STATIC = "quasi-static estimate at this fidelity level: "
+
+
+def quasi_static_extras(drive: Drive, params: Mapping[str, Any], tight, slack,
+                        tight_length) -> dict[str, np.ndarray]:
+    """Level 2-3 outputs estimated from the span tensions, for the levels that do not model them
+    (vectorised over samples).
+
+    * midspan deflection: static sag of a string of mass per length m/p under its own weight,
+      g cos(inclination) (m/p) l^2 / (8 T), reported negative (towards gravity); a span without
+      tension reports the geometric bound l / 2;
+    * largest link tension: the larger span tension;
+    * largest contact force: with rigid seats the first seated roller on the driver takes at
+      most the tight-span tension, which is what we report.
+    """
+    tight, slack, tight_length = (np.asarray(v, float) for v in (tight, slack, tight_length))
+    rho = params["chain.link_mass"] / drive.pitch
+    g_n = params["gravity"] * math.cos(params["drive.inclination"])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sag = rho * g_n * tight_length**2 / (8.0 * tight)
+    sag = np.where((tight > 0) & np.isfinite(sag), np.minimum(sag, tight_length / 2),
+                   tight_length / 2)
+    return {"tight_span.midspan_deflection": -sag,
+            "chain.max_link_tension": np.maximum(tight, slack),
+            "contact.max_force": tight.copy()}
+
+
+class Model(ABC):
+    """One fidelity level of the chain drive.
+
+    Subclasses set ``level``, ``name`` and implement the abstract methods. ``params`` is the
+    validated parameter dict of :mod:`chainmodel.parameters` (all names present).
+    """
+
+    level: ClassVar[int]
+    name: ClassVar[str]
+    #: state layout [q, v] with dq/dt = v for the first half (enables symplectic steppers)
+    second_order: ClassVar[bool] = False
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any]):
+        if drive.links is None:
+            raise ValueError("a dynamic scene needs the chain's number of links (drive.links)")
+        self.drive = drive
+        self.params = dict(params)
+
+    # --- state ---------------------------------------------------------------------------
+    @property
+    @abstractmethod
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the state vector's entries (SI units)."""
+
+    @property
+    def n_states(self) -> int:
+        return len(self.state_names)
+
+    @abstractmethod
+    def initial_state(self, u: Inputs) -> np.ndarray:
+        """State at rest consistent with the input-shaft angle ``u.angle``."""
+
+    @abstractmethod
+    def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
+        """dx/dt."""
+
+    @abstractmethod
+    def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
+        """Every output of ALL_OUTPUTS, by name, in SI units."""
+
+    # --- optional capabilities (defaults are safe) ----------------------------------------
+    def output_descriptions(self) -> dict[str, str]:
+        """Description of each output at this level; outputs the level cannot compute say that
+        they are quasi-static estimates."""
+        return {o.name: o.description for o in ALL_OUTPUTS}
+
+    def switching_functions(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
+        """Smooth functions whose sign changes mark kinks in rhs (a span going slack, a contact
+        opening). Steppers stop on them instead of smearing the switch."""
+        return np.empty(0)
+
+    def stable_step(self, x: np.ndarray) -> float:
+        """Largest stable step of an explicit scheme (per unit of the scheme's stability
+        interval on the imaginary axis, i.e. 1 / omega_max); inf when unknown."""
+        return math.inf
+
+    def jacobian_sparsity(self):
+        """Sparsity pattern of d(rhs)/dx for implicit steppers (None: dense)."""
+        return None
+
+    def check(self, t: float, x: np.ndarray) -> None:
+        """Raise SimulationDiverged if the state is not physical. Default: finite check."""
+        if not np.all(np.isfinite(x)):
+            bad = [n for n, v in zip(self.state_names, x) if not math.isfinite(v)]
+            raise SimulationDiverged(
+                f"{self.name} model diverged at t = {t:.6g} s: non-finite state {', '.join(bad[:5])}; "
+                "try a smaller step or an implicit solver (solver.method = radau)")
+
+    def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
+        """Extra arrays for plots (e.g. roller positions); empty by default."""
+        return {}
+
+    def static_tension(self) -> float:
+        """Static span tension at rest with no load [N] (what the centre distance and
+        pre-strain give this level); nan where not defined."""
+        return math.nan

@@ -1,0 +1,221 @@
+"""The parameter schema: one list of every parameter a scene, the FMU and the CLI can set.
+
+Each parameter has a structured FMI name, an SI unit, a default (the numerical example of
+seed 003 section 7 where the paper gives one), a description and its valid range. The FMU
+adapter generates its variables from this list and the scene validates against it, so a value
+is checked the same way wherever it enters.
+
+Values the paper does not give carry a default with its reason in the description; see
+docs/parameters.md for the table.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+__all__ = ["Parameter", "PARAMETERS", "BY_NAME", "defaults", "validate", "FIDELITY_NAMES",
+           "fidelity_level"]
+
+FIDELITY_NAMES = ("kinematic", "torsional", "modal", "multibody")
+
+
+def fidelity_level(value) -> int:
+    """Fidelity as a level number; accepts 0-3 or a name (kinematic ... multibody)."""
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key in FIDELITY_NAMES:
+            return FIDELITY_NAMES.index(key)
+        if key.isdigit():
+            value = int(key)
+        else:
+            raise ValueError(f"fidelity must be 0-3 or one of {', '.join(FIDELITY_NAMES)}, "
+                             f"got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 0 <= value <= 3:
+        raise ValueError(f"fidelity must be 0-3 or one of {', '.join(FIDELITY_NAMES)}, got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    default: Any
+    unit: str
+    description: str
+    kind: type = float
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False
+    choices: tuple = ()
+    display_unit: str | None = None
+    levels: tuple[int, ...] = (0, 1, 2, 3)
+    structural: bool = True
+
+    def check(self, value):
+        """Return the value converted to this parameter's type, or raise ValueError that names
+        the parameter, the value and what would be valid."""
+        name = self.name
+        if self.kind is bool:
+            if isinstance(value, bool):
+                return value
+            if isinstance(value, numbers.Integral) and value in (0, 1):
+                return bool(value)
+            if isinstance(value, str) and value.lower() in ("true", "false", "1", "0"):
+                return value.lower() in ("true", "1")
+            raise ValueError(f"parameter {name} must be true or false, got {value!r}")
+        if self.kind is str:
+            if not isinstance(value, str) or (self.choices and value not in self.choices):
+                raise ValueError(f"parameter {name} must be one of {', '.join(self.choices)}, "
+                                 f"got {value!r}")
+            return value
+        if self.kind is int:
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not float(value).is_integer():
+                raise ValueError(f"parameter {name} must be a whole number{self._range()}, got {value!r}")
+            value = int(value)
+        else:
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+                raise ValueError(f"parameter {name} must be a finite number{self._range()}, got {value!r}")
+            value = float(value)
+        lo_bad = self.minimum is not None and (value < self.minimum or
+                                               (self.exclusive_minimum and value == self.minimum))
+        hi_bad = self.maximum is not None and value > self.maximum
+        if lo_bad or hi_bad:
+            raise ValueError(f"parameter {name} must be{self._range()} [{self.unit or '-'}], got {value!r}")
+        return value
+
+    def _range(self) -> str:
+        lo, hi = self.minimum, self.maximum
+        if lo is None and hi is None:
+            return ""
+        if hi is None:
+            return f" {'>' if self.exclusive_minimum else '>='} {lo:g}"
+        if lo is None:
+            return f" <= {hi:g}"
+        return f" in {'(' if self.exclusive_minimum else '['}{lo:g}, {hi:g}]"
+
+
+def _p(*args, **kw) -> Parameter:
+    return Parameter(*args, **kw)
+
+
+# ISO 606 10B roller (the xu2010 chain, p = 15.875 mm): d1 = 10.16 mm.
+_ROLLER_RADIUS = 10.16e-3 / 2
+_SEAT_RADIUS = 0.505 * 10.16e-3  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
+
+PARAMETERS: tuple[Parameter, ...] = (
+    _p("fidelity", 0, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody",
+       kind=int, minimum=0, maximum=3),
+    # drive
+    _p("drive.driver_teeth", 25, "", "teeth on the driver (input) sprocket, z1",
+       kind=int, minimum=3, maximum=500),
+    _p("drive.driven_teeth", 17, "", "teeth on the driven (output) sprocket, z2",
+       kind=int, minimum=3, maximum=500),
+    _p("drive.pitch", 0.015875, "m", "chain and sprocket pitch p", minimum=0.0,
+       exclusive_minimum=True, maximum=1.0, display_unit="mm"),
+    _p("drive.links", 46, "", "links in the closed chain, M", kind=int, minimum=4, maximum=100000),
+    _p("drive.centre_distance", 0.1977, "m",
+       "shaft centre distance; 0 selects the distance at which the chain wraps tightly "
+       "(seed 004 section 2)", minimum=0.0, display_unit="mm"),
+    _p("drive.inclination", 0.0, "rad",
+       "angle of the line of centres (driven to driver) above the horizontal; sets the "
+       "direction of gravity", minimum=-math.pi, maximum=math.pi, display_unit="deg"),
+    # chain
+    _p("chain.link_mass", 0.0162, "kg", "mass of one link including one roller (seed 003)",
+       minimum=0.0, exclusive_minimum=True),
+    _p("chain.link_stiffness", 5.1e7, "N/m", "longitudinal stiffness of one link (seed 003)",
+       minimum=0.0, exclusive_minimum=True),
+    _p("chain.link_damping", 100.0, "N.s/m", "damping of one link (seed 003)", minimum=0.0),
+    _p("chain.pretension", 0.0, "N",
+       "extra static tension from a chain pre-strain: every link's free length is "
+       "p - pretension / link_stiffness (adds to the tension the centre distance gives)",
+       minimum=0.0),
+    _p("chain.roller_radius", _ROLLER_RADIUS, "m",
+       "roller radius R_r (not in seed 003; ISO 606 10B, d1 = 10.16 mm)", minimum=0.0,
+       exclusive_minimum=True, display_unit="mm", levels=(3,)),
+    # contact
+    _p("contact.seat_radius", _SEAT_RADIUS, "m",
+       "radius R_t of the circular tooth seat (not in seed 003; ISO 606 minimum 0.505 d1); "
+       "R_t - R_r is the roller-seat clearance", minimum=0.0, exclusive_minimum=True,
+       display_unit="mm", levels=(3,)),
+    _p("contact.stiffness", 8.46e6, "N/m", "equivalent roller-tooth contact stiffness (seed 003)",
+       minimum=0.0, exclusive_minimum=True, levels=(1, 2, 3)),
+    _p("contact.damping", 74.0, "N.s/m",
+       "roller-tooth contact damping (not in seed 003; about 10 % of critical for one link "
+       "mass on the contact spring)", minimum=0.0, levels=(3,)),
+    # sprockets
+    _p("driver.inertia", 4.0108e-3, "kg.m2", "driver sprocket moment of inertia I1 (seed 003)",
+       minimum=0.0, exclusive_minimum=True),
+    _p("driven.inertia", 9.33e-4, "kg.m2",
+       "driven sprocket (and load) moment of inertia I2 (seed 003)", minimum=0.0,
+       exclusive_minimum=True),
+    _p("driven.damping", 0.0, "N.m.s/rad",
+       "viscous damping of the driven shaft d1 (seed 004 eq 50; none in seed 003)", minimum=0.0),
+    # input shaft
+    _p("input_shaft.stiffness", 12000.0, "N.m/rad",
+       "torsional stiffness of the input shaft k_r (seed 003)", minimum=0.0,
+       exclusive_minimum=True, levels=(1, 2, 3)),
+    _p("input_shaft.damping", 0.69, "N.m.s/rad",
+       "torsional damping of the input shaft c_r (not in seed 003; 5 % of critical for the "
+       "driver inertia on the shaft spring)", minimum=0.0, levels=(1, 2, 3)),
+    _p("input_shaft.rigid", False, "", "couple the driver rigidly to the input-shaft angle",
+       kind=bool, levels=(1, 2, 3)),
+    # environment
+    _p("gravity", 9.81, "m/s2", "gravitational acceleration (acts on the chain)", minimum=0.0,
+       levels=(0, 1, 2, 3)),
+    # level 2
+    _p("modal.modes", 1, "", "transverse Galerkin modes per span (seed 004 eq 57)",
+       kind=int, minimum=1, maximum=20, levels=(2,)),
+    _p("modal.damping_ratio", 0.02, "", "modal damping ratio of the span modes", minimum=0.0,
+       maximum=1.0, levels=(2,)),
+    _p("modal.impulse_forcing", False, "",
+       "add the impulse-train idealisation of the meshing impacts (seed 004 eqs 63-65)",
+       kind=bool, levels=(2,)),
+    # level 3
+    _p("multibody.rotating_frame_forces", False, "",
+       "add the appendix's centrifugal and tangential inertia forces Q on seated rollers "
+       "(seed 003 appendix eqs 4-7); off is the consistent choice for inertial coordinates",
+       kind=bool, levels=(3,)),
+    # solver
+    _p("solver.method", "auto", "", "time stepper (see chainmodel.integrate)", kind=str,
+       choices=("auto", "rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda"),
+       levels=(1, 2, 3)),
+    _p("solver.step", 0.0, "s", "fixed step; 0 chooses the largest stable step automatically",
+       minimum=0.0, levels=(1, 2, 3)),
+    _p("solver.rtol", 1e-6, "", "relative tolerance of the adaptive steppers", minimum=1e-12,
+       maximum=0.1, levels=(1, 2, 3)),
+)
+
+BY_NAME: dict[str, Parameter] = {p.name: p for p in PARAMETERS}
+
+
+def defaults() -> dict[str, Any]:
+    """Every parameter at its default value."""
+    return {p.name: p.default for p in PARAMETERS}
+
+
+def validate(values: Mapping[str, Any], base: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Merge ``values`` over ``base`` (defaults if None) and check every entry.
+
+    Unknown names and invalid values raise ValueError naming the parameter."""
+    out = dict(defaults() if base is None else base)
+    for name, value in values.items():
+        if name not in BY_NAME:
+            close = [n for n in BY_NAME if n.split(".")[-1] == name.split(".")[-1]]
+            hint = f"; did you mean {close[0]}?" if close else ""
+            raise ValueError(f"unknown parameter {name!r}{hint}")
+        if name == "fidelity":
+            out[name] = fidelity_level(value)
+            continue
+        out[name] = BY_NAME[name].check(value)
+    if out["contact.seat_radius"] < out["chain.roller_radius"]:
+        raise ValueError(
+            f"parameter contact.seat_radius ({out['contact.seat_radius']:g} m) must be at least "
+            f"chain.roller_radius ({out['chain.roller_radius']:g} m): the roller must fit its seat")
+    if out["chain.pretension"] >= out["chain.link_stiffness"] * out["drive.pitch"] * 0.05:
+        raise ValueError(
+            f"parameter chain.pretension ({out['chain.pretension']:g} N) would pre-strain the "
+            f"chain by 5 % or more; use less than {0.05 * out['chain.link_stiffness'] * out['drive.pitch']:g} N")
+    return out
+
