@@ -150,7 +150,15 @@ class Scene:
         scene = cls(spec["name"], dict(spec["parameters"]), spec["operating"], spec["duration"],
                     spec["output_interval"], list(spec["notes"]))
         if spec.get("static_tension") is not None:
-            scene = scene.with_static_tension(spec["static_tension"])
+            from .models.kinematic import static_span_tension
+            geometric = static_span_tension(scene.drive, dict(scene.parameters,
+                                                              **{"chain.pretension": 0.0}))
+            if spec["static_tension"] >= geometric:
+                scene = scene.with_static_tension(spec["static_tension"])
+            else:
+                scene.notes.append(f"the centre distance alone gives a static span tension of "
+                                   f"{geometric:.4g} N, more than the {spec['static_tension']:g} N "
+                                   "of Table 2; kept")
         return scene.with_overrides(**overrides) if overrides else scene
 
     @classmethod

@@ -1,0 +1,135 @@
+"""Scenes, the parameter schema and simulate(): construction, overrides, validation."""
+
+import math
+
+import numpy as np
+import pytest
+
+import chainmodel
+from chainmodel import parameters as P
+from chainmodel.models.kinematic import static_span_tension
+from chainmodel.presets import preset, preset_names, reference_values
+from chainmodel.scene import RPM, OperatingPoint, Scene, load_scene
+
+
+def test_every_default_validates_and_every_real_has_a_unit_or_is_dimensionless():
+    values = P.validate({})
+    for p in P.PARAMETERS:
+        assert p.description
+        assert values[p.name] == p.check(p.default)
+
+
+@pytest.mark.parametrize("name,value,fragment", [
+    ("drive.pitch", 0.0, "drive.pitch"),
+    ("drive.driver_teeth", 2, "drive.driver_teeth"),
+    ("drive.driver_teeth", 12.5, "whole number"),
+    ("chain.link_mass", -1.0, "chain.link_mass"),
+    ("solver.method", "euler", "rk4"),
+    ("input_shaft.rigid", "maybe", "true or false"),
+    ("fidelity", 7, "fidelity"),
+    ("gravity", math.nan, "finite"),
+])
+def test_bad_parameters_name_themselves(name, value, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        P.validate({name: value})
+
+
+def test_unknown_parameter_suggests_the_close_name():
+    with pytest.raises(ValueError, match="did you mean chain.link_mass"):
+        P.validate({"link_mass": 1.0})
+
+
+def test_fidelity_accepts_names():
+    assert [P.fidelity_level(n) for n in P.FIDELITY_NAMES] == [0, 1, 2, 3]
+
+
+def test_xu2010_scene_is_the_paper_example():
+    v = reference_values("multibody_example_xu2010.csv")
+    sc = load_scene("xu2010")
+    d = sc.drive
+    assert (d.n_driver, d.n_driven, d.links) == (v["z1"], v["z2"], v["links"])
+    assert d.centre_distance == pytest.approx(v["center_distance"], rel=1e-12)
+    assert sc.operating.speed == pytest.approx(v["input_speed"] * 2 * math.pi / 60)
+    assert sc.operating.load_torque == v["M_load"]
+    assert sc.parameters["chain.link_stiffness"] == v["k_link"]
+    assert sc.parameters["contact.stiffness"] == v["k_contact"]
+    assert sc.parameters["input_shaft.stiffness"] == v["k_shaft"]
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_every_preset_makes_a_scene_with_a_drive(name):
+    sc = load_scene(name)
+    assert sc.drive.n_driver == preset(name).n_driver
+    assert sc.drive.links is not None
+
+
+def test_operating_profile_integrates_its_speed():
+    op = OperatingPoint(speed=12.0, ramp_time=0.05, load_torque=1.0)
+    t = np.linspace(0, 0.2, 4001)
+    speed = np.array([op.inputs(x).speed for x in t])
+    angle = np.array([op.inputs(x).angle for x in t])
+    # trapezoidal integral of the (piecewise linear) speed is exact on this grid
+    integral = np.concatenate([[0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))])
+    np.testing.assert_allclose(angle, integral, atol=1e-12)
+    assert op.inputs(0.01).acceleration == pytest.approx(12.0 / 0.05)
+    assert op.inputs(0.1).acceleration == 0.0
+
+
+def test_overrides_by_keyword_and_underscore_names():
+    sc = load_scene("xu2010", fidelity="kinematic", chain_link_damping=50, input_speed_rpm=60,
+                    load_torque=10.0)
+    assert sc.fidelity == 0
+    assert sc.parameters["chain.link_damping"] == 50
+    assert sc.operating.speed == pytest.approx(60 * RPM)
+    with pytest.raises(ValueError, match="unknown scene setting"):
+        load_scene("xu2010", colour="red")
+
+
+def test_static_tension_sets_the_pretension():
+    sc = load_scene("xu2010", static_tension=2000.0)
+    assert static_span_tension(sc.drive, sc.parameters) == pytest.approx(2000.0, rel=1e-9)
+    with pytest.raises(ValueError, match="static_tension"):
+        load_scene("xu2010", static_tension=10.0)  # less than the centre distance gives
+
+
+def test_toml_scene(tmp_path):
+    f = tmp_path / "s.toml"
+    f.write_text('preset = "C1"\nfidelity = 0\nduration = 0.2\n[operating]\n'
+                 'input_speed_rpm = 100\nload_torque = 5.0\n[parameters]\n"chain.link_damping" = 3.0\n')
+    sc = load_scene(str(f))
+    assert sc.name == "s"
+    assert sc.drive.n_driver == 12 and sc.duration == 0.2
+    assert sc.parameters["chain.link_damping"] == 3.0
+    assert sc.operating.speed == pytest.approx(100 * RPM)
+    f.write_text('preset = "C1"\nspeed = 3\n')
+    with pytest.raises(ValueError, match="unknown keys"):
+        load_scene(str(f))
+    f.write_text('preset = "C1\n')
+    with pytest.raises(ValueError, match="not valid TOML"):
+        load_scene(str(f))
+
+
+def test_unknown_scene_lists_presets():
+    with pytest.raises(ValueError, match="xu2010"):
+        load_scene("nonesuch")
+
+
+def test_simulate_level0_tooth_ratio_and_result_access(tmp_path):
+    r = chainmodel.simulate("xu2010", fidelity="kinematic", duration=0.3, output_interval=2e-4)
+    s = r.summary()
+    assert s["tooth_ratio"] == pytest.approx(25 / 17, rel=1e-9)
+    assert r["driven.speed"].shape == r.time.shape
+    assert np.all(np.isfinite(np.column_stack([r[n] for n in r.names])))
+    with pytest.raises(KeyError, match="outputs are"):
+        r["nonesuch"]
+    path = r.to_csv(tmp_path / "out.csv")
+    head = path.read_text().splitlines()[:2]
+    assert head[0].startswith("time,driver.angle")
+    assert head[1].startswith("s,rad")
+
+
+def test_simulate_rejects_bad_durations():
+    with pytest.raises(ValueError, match="duration"):
+        chainmodel.simulate("xu2010", fidelity=0, duration=-1.0)
+    with pytest.raises(ValueError, match="output_interval"):
+        Scene("x", {}, duration=0.1, output_interval=0.2)
