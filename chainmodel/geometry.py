@@ -206,16 +206,17 @@ class Drive:
         pitch = check_positive("pitch", pitch)
         centre_distance = check_positive("centre_distance", centre_distance)
         y_c = Sprocket(n_driven, pitch).inscribed_radius - Sprocket(n_driver, pitch).inscribed_radius
-        if centre_distance <= abs(y_c):
+        # Valid range: pitch circles apart (R_c + R_o) and N >= 1 (x_c >= 2 p); one bound
+        # for both, so the message never suggests a distance that fails the other check.
+        radii = Sprocket(n_driven, pitch).pitch_radius + Sprocket(n_driver, pitch).pitch_radius
+        least = max(radii, math.hypot(2 * pitch, y_c))
+        if centre_distance <= least:
+            why = ("the pitch circles overlap" if centre_distance <= radii
+                   else "the tight span would hold less than one whole pitch")
             raise ValueError(
-                f"centre_distance {centre_distance:.6g} m is shorter than the difference of the "
-                f"inscribed radii {abs(y_c):.6g} m: the sprockets overlap")
+                f"centre_distance must exceed {least:.6g} m for sprockets of {n_driver} and "
+                f"{n_driven} teeth at pitch {pitch:.6g} m, got {centre_distance:.6g} m: {why}")
         span, frac = split_tangent_length(math.sqrt(centre_distance**2 - y_c**2), pitch)
-        if span < 1:
-            raise ValueError(
-                f"centre_distance {centre_distance:.6g} m leaves less than one whole pitch in the "
-                f"tight span (N = {span}); the sprockets overlap or nearly touch: use at least "
-                f"{math.hypot(2 * pitch, y_c):.6g} m")
         return cls(n_driver, n_driven, pitch, span, frac, links, name)
 
     @classmethod
