@@ -179,7 +179,7 @@ def approximate(drive: Drive, theta4, omega4=1.0, alpha4=0.0, *, form: str = "co
         raise ValueError(f"events must be 'exact' or 'approximate', got {events!r}")
     two_a = 2.0 * math.pi / drive.n_driver
     t4 = t4s - np.mod(t4s - np.asarray(theta4, float), two_a)
-    h = (t4 < t4r).astype(np.int8)
+    h = (t4 < t4r - fb._EVENT_TOL).astype(np.int8)      # as fourbar.step_h
     t2 = approximate_driven_angle(drive, t4, h)
     ratio = approximate_velocity_ratio(drive, t2, t4, form)
     w4 = np.broadcast_to(np.asarray(omega4, float), t4.shape).copy()

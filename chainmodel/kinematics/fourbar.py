@@ -205,6 +205,9 @@ def release(drive: Drive, lower: bool = False) -> Configuration:
     return _events(drive, lower)[2]
 
 
+_EVENT_TOL = 1e-12  # rad of driver angle
+
+
 @dataclass(frozen=True)
 class Kinematics:
     """Four-bar state over an array of driver contact angles (paper conventions, SI units).
@@ -237,7 +240,9 @@ def in_period(drive: Drive, theta4) -> np.ndarray:
 def step_h(drive: Drive, theta4) -> np.ndarray:
     """h(theta4) of seed 000 eq (26), corrected: 0 on [theta4r, theta4s], 1 below theta4r."""
     _, _, r = _events(drive)
-    return (in_period(drive, theta4) < r.theta4).astype(np.int8)
+    # strictly past release: at f = 0 release coincides with the next seating and round-off can
+    # leave a sliver below theta4r where h = 1 would give a spurious (N + 2) p span
+    return (in_period(drive, theta4) < r.theta4 - _EVENT_TOL).astype(np.int8)
 
 
 def exact(drive: Drive, theta4, omega4=1.0, alpha4=0.0) -> Kinematics:
