@@ -3,12 +3,14 @@
 from .base import (ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, Inputs, Model, OutputSpec,
                    SimulationDiverged)
 from .kinematic import KinematicModel
+from .torsional import TorsionalModel
 
 __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "OutputSpec",
            "SimulationDiverged", "KinematicModel", "MODEL_CLASSES", "model_class"]
 
 #: level -> model class; levels register here as they are implemented
 MODEL_CLASSES: dict[int, type[Model]] = {0: KinematicModel}
+MODEL_CLASSES[1] = TorsionalModel
 
 
 def model_class(level: int) -> type[Model]:

@@ -1,0 +1,363 @@
+"""Scalar kernel shared by levels 1 (torsional) and 2 (modal): both spans' exact polygon geometry
+for one pair of sprocket rotations, their tensions, the sprocket equations (seed 004 eq 50 with
+the input shaft of seed 003) and the span modes (seed 004 eqs 57-61).
+
+Why a separate kernel: a dynamic level evaluates the geometry of one state at a time, tens of
+thousands of times per simulated second. :func:`chainmodel.kinematics.wrapping.chain_geometry`
+is vectorised numpy and costs tens of microseconds for a single sample; the functions here do
+the same computation with the ``math`` module on floats (the same window condition, the same
+fixed-point iteration, the same link counting: tests/test_torsional.py checks them against
+``chain_geometry`` over many random rotation pairs). They are written in the subset of Python
+that numba compiles; when numba is installed (``pip install chaindrive[fast]``) they are
+compiled once and cached, otherwise they run as plain Python. ``CHAINMODEL_NUMBA=0`` in the
+environment forces the plain-Python path (the tests run both).
+
+Conventions: forward-positive rotations phi1 (driver) and phi2 (driven), zero in the reference
+configuration of :mod:`chainmodel.kinematics.rotation`; the XY frame of seed 000/004 with the
+driven sprocket O at the origin and the driver C at (x_c, y_c). The upper span runs from the
+driven sprocket onto the driver (tight when driving forward), the lower span from the driver onto
+the driven sprocket.
+
+Layout of the constant vectors (built by :func:`geometry_constants` and the models):
+
+``G`` (geometry): theta4s, theta2s, alpha_c, alpha_o, R_c, R_o, x_c, y_c, theta1, n_c, n_o, N, M.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
+
+_EDGE = 1e-9          # as chainmodel.kinematics.wrapping._EDGE: an endpoint at an event is past it
+_HALF_PI = 0.5 * math.pi
+_TWO_PI = 2.0 * math.pi
+G_SIZE = 13
+
+
+def _numba_wanted() -> bool:
+    return os.environ.get("CHAINMODEL_NUMBA", "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+try:  # optional acceleration; everything below also runs as plain Python
+    if not _numba_wanted():
+        raise ImportError
+    import numba as _numba
+
+    def jit(fn):
+        """Compile with numba (cached on disk); the plain function stays at ``.py_func``."""
+        return _numba.njit(cache=True, fastmath=False)(fn)
+
+    NUMBA = True
+except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
+    def jit(fn):
+        fn.py_func = fn
+        return fn
+
+    NUMBA = False
+
+
+def geometry_constants(drive) -> np.ndarray:
+    """The constant vector ``G`` of a drive (module docstring)."""
+    from ..kinematics import fourbar as fb
+    s = fb.seating(drive)
+    m = -1 if drive.links is None else drive.links
+    return np.array([s.theta4, s.theta2, math.pi / drive.n_driver, math.pi / drive.n_driven,
+                     drive.driver.pitch_radius, drive.driven.pitch_radius, drive.x_c, drive.y_c,
+                     drive.centre_angle, drive.n_driver, drive.n_driven, drive.span_pitches, m],
+                    float)
+
+
+@jit
+def _span(cfx, cfy, rf, af, phf, ctx, cty, rt, at, pht, dir0):
+    """One straight span between two sprockets (scalar form of wrapping._span).
+
+    Returns (length, arm_from, arm_to, j_from, j_to, u_from, u_to, ang_from, ang_to, direction),
+    u the un-floored seat coordinates whose integer crossings are the release (from) and
+    seating (to) events."""
+    d = dir0
+    jf_old = -1.0e300
+    jt_old = -1.0e300
+    jf = 0.0
+    jt = 0.0
+    angf = 0.0
+    angt = 0.0
+    for _ in range(8):
+        jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + _EDGE)
+        jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + _EDGE)
+        angf = phf + 2.0 * af * jf
+        angt = pht + 2.0 * at * jt
+        ax = cfx + rf * math.cos(angf)
+        ay = cfy + rf * math.sin(angf)
+        bx = ctx + rt * math.cos(angt)
+        by = cty + rt * math.sin(angt)
+        nd = math.atan2(by - ay, bx - ax)
+        nd = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        if jf == jf_old and jt == jt_old:
+            d = nd
+            break
+        jf_old = jf
+        jt_old = jt
+        d = nd
+    ax = cfx + rf * math.cos(angf)
+    ay = cfy + rf * math.sin(angf)
+    bx = ctx + rt * math.cos(angt)
+    by = cty + rt * math.sin(angt)
+    length = math.hypot(bx - ax, by - ay)
+    uf = (d + _HALF_PI + af - phf) / (2.0 * af)
+    ut = (d + _HALF_PI + at - pht) / (2.0 * at)
+    return (length, rf * math.sin(angf - d), rt * math.sin(angt - d), jf, jt, uf, ut, angf,
+            angt, d)
+
+
+@jit
+def span_geometry(phi1, phi2, G):
+    """Both spans for one pair of rotations (scalar form of wrapping.chain_geometry).
+
+    Returns a tuple of 20 floats: for the upper span then the lower span
+    (length, arm_start, arm_end, links, u_start, u_end, angle_start, angle_end, direction, ...)
+    followed by (wrapped_driver, wrapped_driven). ``arm_start`` is the forward torque arm on
+    the sprocket the span leaves, ``arm_end`` the resisting arm on the one it runs onto, so
+    d(length)/d(rotation) = +arm_end for the sprocket the span runs onto and -arm_start for the
+    one it leaves (virtual work; checked against finite differences in the tests).
+    """
+    th4s = G[0]
+    th2s = G[1]
+    a_c = G[2]
+    a_o = G[3]
+    r_c = G[4]
+    r_o = G[5]
+    xc = G[6]
+    yc = G[7]
+    th1 = G[8]
+    n_c = G[9]
+    n_o = G[10]
+    n_span = G[11]
+    m_links = G[12]
+    ph_c = th4s - phi1
+    ph_o = th2s - phi2
+    (lu, aus, aue, jus, jue, uus, uue, gus, gue, du) = _span(0.0, 0.0, r_o, a_o, ph_o, xc, yc, r_c,
+                                                             a_c, ph_c, 0.0)
+    (ll, als, ale, jls, jle, uls, ule, gls, gle, dl) = _span(xc, yc, r_c, a_c, ph_c, 0.0, 0.0, r_o,
+                                                             a_o, ph_o, math.pi + 2.0 * th1)
+    j_lc = jls - n_c * math.floor((jls - jue + n_c - 1.0) / n_c)
+    j_lo = jle - n_o * math.floor((jle - jus - 1.0) / n_o)
+    wrapped_c = jue - j_lc
+    wrapped_o = j_lo - jus
+    n_up = n_span + 1.0 - jue + jus
+    n_low = m_links - n_up - wrapped_c - wrapped_o
+    return (lu, aus, aue, n_up, uus, uue, gus, gue, du,
+            ll, als, ale, n_low, uls, ule, gls, gle, dl, wrapped_c, wrapped_o)
+
+
+# --- parameter vector P of the dynamic kernel -------------------------------------------------
+P_K_LINK, P_C_LINK, P_P_FREE, P_SEAT_C, P_SEAT_SLACK, P_RIGID, P_K_SHAFT, P_C_SHAFT = range(8)
+P_D2, P_J11, P_J12, P_J22, P_RHOA, P_MODES, P_LBAR_U, P_LBAR_L = range(8, 16)
+P_ZETA, P_W1_U, P_W1_L, P_IMPULSE, P_REF_U, P_REF_L, P_GN_U, P_GN_L, P_PITCH = range(16, 25)
+P_SIZE = 25
+
+# --- auxiliary outputs of the kernel ----------------------------------------------------------
+(A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
+ A_EV_LS, A_EV_LE, A_MID_UP, A_MID_LOW, A_PHI1, A_W1, A_N_UP, A_N_LOW) = range(19)
+A_SIZE = 19
+
+
+@jit
+def _galerkin_g(k):
+    """G_m of seed 004 eq 59: 2 int_0^1 sin(m pi x) dx."""
+    return 2.0 * (1.0 - (-1.0) ** k) / (k * math.pi)
+
+
+@jit
+def _galerkin_e(k):
+    """E_m of seed 004 eq 59: 2 int_0^1 x sin(m pi x) dx."""
+    return -2.0 * (-1.0) ** k / (k * math.pi)
+
+
+@jit
+def _coriolis(k, j):
+    """Gyroscopic Galerkin coefficient of 2 s w_xt on sin modes: 2 int_0^1 sin(k pi x)
+    j pi cos(j pi x) dx * 2 / 2 = 2 k j (1 - (-1)^(k+j)) / (k^2 - j^2), zero for k = j.
+    (Seed 004 eq 59 prints k^2 + j^2 in the denominator; the projection gives k^2 - j^2, which
+    makes the matrix skew-symmetric as a gyroscopic term must be.)"""
+    if k == j:
+        return 0.0
+    return 2.0 * k * j * (1.0 - (-1.0) ** (k + j)) / (k * k - j * j)
+
+
+@jit
+def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
+             seat_slack, length_rate):
+    """Span tension from its stretch (a span cannot push) and the switching function whose sign
+    change marks the switch: min(k delta, T_raw), continuous through both ways of going slack."""
+    k_eff = 1.0 / (links / k_link + seat_c)
+    delta = length + stretch_modal - links * p_free - seat_slack
+    raw = k_eff * delta + (c_link / links) * (length_rate + stretch_rate)
+    switch = min(k_eff * delta, raw)
+    if switch > 0.0:
+        return raw, switch
+    return 0.0, switch
+
+
+@jit
+def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
+    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2.
+
+    State layout: flexible shaft [phi1, phi2, w1, w2, modes], rigid shaft [phi2, w2, modes];
+    modes = [q_up(1..n), q_low(1..n), v_up(1..n), v_low(1..n)] with q the Galerkin amplitudes of
+    the transverse deflection from the chord (m) and v the projections of the material transverse
+    velocity (see docs/reduced_models.md, "endpoint motion"), so that dq/dt = v - (G - E) Y1' - E Y2'
+    and the velocity jumps of the span endpoints at seating and release (the impulses of seed 004
+    eq 63) need no state jumps.
+    """
+    rigid = P[P_RIGID] > 0.5
+    if rigid:
+        phi1 = th_in
+        w1 = w_in
+        phi2 = x[0]
+        w2 = x[1]
+        base = 2
+    else:
+        phi1 = x[0]
+        phi2 = x[1]
+        w1 = x[2]
+        w2 = x[3]
+        base = 4
+    n = int(P[P_MODES])
+    (lu, aus, aue, nu, uus, uue, gus, gue, du,
+     ll, als, ale, nl, uls, ule, gls, gle, dl, wc, wo) = span_geometry(phi1, phi2, G)
+    r_c = G[4]
+    r_o = G[5]
+    p_free = P[P_P_FREE]
+    # --- span modes: endpoint transverse velocities and modal stretching (seed 004 eqs 38, 46)
+    s_u = 0.0
+    s_l = 0.0
+    sr_u = 0.0
+    sr_l = 0.0
+    speed = G[9] * P[P_PITCH] * w1 / (2.0 * math.pi)   # chain speed S: pitches per second * p
+    impulse = P[P_IMPULSE] > 0.5
+    y1u = 0.0
+    y2u = 0.0
+    y1l = 0.0
+    y2l = 0.0
+    if n > 0:
+        if impulse:
+            # seed 004 eqs 63-64: endpoint velocity jumps S p / R at release (start) and seating
+            # (end), as a zero-mean sawtooth whose jumps are the Dirac pulses of y''
+            y1u = speed * P[P_PITCH] / r_o * (math.floor(uus) - uus + 0.5)
+            y2u = speed * P[P_PITCH] / r_c * (math.floor(uue) - uue + 0.5)
+            y1l = speed * P[P_PITCH] / r_c * (math.floor(uls) - uls + 0.5)
+            y2l = speed * P[P_PITCH] / r_o * (math.floor(ule) - ule + 0.5)
+        else:
+            # the kinematic endpoint motion: d/dt of R e^{i angle} across the reference line
+            y1u = -w2 * r_o * math.cos(gus - P[P_REF_U])
+            y2u = -w1 * r_c * math.cos(gue - P[P_REF_U])
+            y1l = -w1 * r_c * math.cos(gls - P[P_REF_L])
+            y2l = -w2 * r_o * math.cos(gle - P[P_REF_L])
+        lbu = P[P_LBAR_U]
+        lbl = P[P_LBAR_L]
+        for k in range(1, n + 1):
+            gk = _galerkin_g(k)
+            ek = _galerkin_e(k)
+            kp2 = (k * math.pi) ** 2
+            qu = x[base + k - 1]
+            ql = x[base + n + k - 1]
+            qdu = x[base + 2 * n + k - 1] - (gk - ek) * y1u - ek * y2u
+            qdl = x[base + 3 * n + k - 1] - (gk - ek) * y1l - ek * y2l
+            dx[base + k - 1] = qdu
+            dx[base + n + k - 1] = qdl
+            s_u += kp2 * qu * qu / (4.0 * lbu)
+            s_l += kp2 * ql * ql / (4.0 * lbl)
+            sr_u += kp2 * qu * qdu / (2.0 * lbu)
+            sr_l += kp2 * ql * qdl / (2.0 * lbl)
+    # --- tensions (seed 004 eq 37 in dimensional form, both spans)
+    rate_u = aue * w1 - aus * w2
+    rate_l = -als * w1 + ale * w2
+    t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
+                        P[P_SEAT_SLACK], rate_u)
+    t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
+                        P[P_SEAT_SLACK], rate_l)
+    # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
+    q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
+    j11 = P[P_J11]
+    j12 = P[P_J12]
+    j22 = P[P_J22]
+    if rigid:
+        acc1 = a_in
+        acc2 = (q2 - j12 * a_in) / j22
+        tau_in = j11 * a_in + j12 * acc2 + t_u * aue - t_l * als
+        dx[0] = w2
+        dx[1] = acc2
+    else:
+        tau_in = P[P_K_SHAFT] * (th_in - phi1) + P[P_C_SHAFT] * (w_in - w1)
+        q1 = tau_in - t_u * aue + t_l * als
+        det = j11 * j22 - j12 * j12
+        acc1 = (j22 * q1 - j12 * q2) / det
+        acc2 = (j11 * q2 - j12 * q1) / det
+        dx[0] = w1
+        dx[1] = w2
+        dx[2] = acc1
+        dx[3] = acc2
+    # --- span modes (seed 004 eqs 58-61, dimensional; tension includes the modal stretching)
+    mid_u = 0.0
+    mid_l = 0.0
+    if n > 0:
+        rho = P[P_RHOA]
+        lbu = P[P_LBAR_U]
+        lbl = P[P_LBAR_L]
+        for k in range(1, n + 1):
+            gk = _galerkin_g(k)
+            kpi = k * math.pi
+            qu = x[base + k - 1]
+            ql = x[base + n + k - 1]
+            cor_u = 0.0
+            cor_l = 0.0
+            for j in range(1, n + 1):
+                c = _coriolis(k, j)
+                if c != 0.0:
+                    cor_u += c * dx[base + j - 1]
+                    cor_l += c * dx[base + n + j - 1]
+            fu = P[P_GN_U] * gk - 2.0 * speed / lbu * cor_u
+            fl = P[P_GN_L] * gk - 2.0 * speed / lbl * cor_l
+            if impulse:
+                # the pulse trains' mean (the p = 0 term of seed 004 eq 66)
+                ek = _galerkin_e(k)
+                rate_o = w2 / (2.0 * G[3])
+                rate_c = w1 / (2.0 * G[2])
+                fu += ((ek - gk) * speed * P[P_PITCH] / r_o * rate_o
+                       - ek * speed * P[P_PITCH] / r_c * rate_c)
+                fl += ((ek - gk) * speed * P[P_PITCH] / r_c * rate_c
+                       - ek * speed * P[P_PITCH] / r_o * rate_o)
+            else:
+                fu -= 2.0 * speed / lbu * (y2u - y1u) * gk
+                fl -= 2.0 * speed / lbl * (y2l - y1l) * gk
+            wu2 = (t_u - rho * speed * speed) / rho * (kpi / lbu) ** 2
+            wl2 = (t_l - rho * speed * speed) / rho * (kpi / lbl) ** 2
+            dx[base + 2 * n + k - 1] = (fu - wu2 * qu - 2.0 * P[P_ZETA] * k * P[P_W1_U]
+                                        * dx[base + k - 1])
+            dx[base + 3 * n + k - 1] = (fl - wl2 * ql - 2.0 * P[P_ZETA] * k * P[P_W1_L]
+                                        * dx[base + n + k - 1])
+            mid_u += qu * math.sin(0.5 * kpi)
+            mid_l += ql * math.sin(0.5 * kpi)
+    aux[A_T_UP] = t_u
+    aux[A_T_LOW] = t_l
+    aux[A_TAU_IN] = tau_in
+    aux[A_ACC1] = acc1
+    aux[A_ACC2] = acc2
+    aux[A_L_UP] = lu
+    aux[A_L_LOW] = ll
+    aux[A_G_UP] = g_u
+    aux[A_G_LOW] = g_l
+    aux[A_EV_US] = math.sin(math.pi * uus)
+    aux[A_EV_UE] = math.sin(math.pi * uue)
+    aux[A_EV_LS] = math.sin(math.pi * uls)
+    aux[A_EV_LE] = math.sin(math.pi * ule)
+    aux[A_MID_UP] = mid_u
+    aux[A_MID_LOW] = mid_l
+    aux[A_PHI1] = phi1
+    aux[A_W1] = w1
+    aux[A_N_UP] = nu
+    aux[A_N_LOW] = nl

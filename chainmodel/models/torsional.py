@@ -1,0 +1,366 @@
+"""Level 1: the torsional model. Driver and driven sprocket rotations and speeds are the states;
+both spans are massless, straight and elastic (seed 004 sections 5.1-5.5 without span modes; the
+input shaft of seed 003).
+
+Equations (derivation and the reduction to seed 004 eq 56 in docs/reduced_models.md)::
+
+    driven:  J22 phi2'' + J12 phi1'' = T_u a_uO - T_l a_lO - d2 phi2' - M_load      (eq 50)
+    driver:  J11 phi1'' + J12 phi2'' = k_s (theta_in - phi1) + c_s (w_in - phi1')
+                                       - T_u a_uC + T_l a_lC                      (seed 003 eq 14)
+
+with the rigid-shaft option phi1 = theta_in (the driver follows the input exactly). Each span's
+length l, moment arms a and link count n come from the exact polygon geometry for the *current*
+pair of rotations (:func:`chainmodel.kinematics.wrapping.chain_geometry`, here through its scalar
+twin in :mod:`.spans`): the endpoint rollers and the links in each span follow seating and
+release. Its tension comes from its stretch::
+
+    T = k_eff (l - n p_free) + (c_link / n) dl/dt   if that and the stretch are positive, else 0
+
+with p_free = p - pretension / k_link the free link length and k_eff = k_link / n (links in
+series; with ``torsional.seat_compliance`` the seats' ladder compliance is added in series). A span
+cannot push: at zero stretch or zero tension it goes slack, and that switch is an event of the
+steppers (:meth:`TorsionalModel.switching_functions`), as are the seating and release events at
+all four span ends. At zero stretch the spans lie exactly where level 0 puts them, so polygonal
+action and the varying wrapping length excite the drive by themselves.
+
+J11, J12, J22: the sprocket inertias plus, with ``torsional.chain_inertia`` (default), the chain's
+mass: rollers on a sprocket at its pitch radius and each span's rollers moving with their
+endpoints (docs/reduced_models.md, "chain inertia"). Without it this is seed 004 eq 50 exactly.
+
+The pretension split of seed 004 eqs 15-17 is what the static solution of these equations gives:
+a driven sprocket turned by dphi2 stretches one span by R dphi2 and relaxes the other as much,
+so with equal span stiffness T_u + T_l stays 2 T0 = P_tot while T_u - T_l = M_1 / R_1.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from ..geometry import Drive
+from ..kinematics import driven_rotation
+from ..kinematics.wrapping import chain_geometry, tooth_period_samples
+from . import spans as S
+from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
+                   quasi_static_extras)
+from .kinematic import static_span_tension
+
+__all__ = ["TorsionalModel", "seat_stiffness"]
+
+#: names of the switching functions, in order
+SWITCH_NAMES = ("upper span slack", "lower span slack", "release from driven (upper span)",
+                "seating on driver (upper span)", "release from driver (lower span)",
+                "seating on driven (lower span)")
+
+
+def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
+    """Stiffness with which the chain wrapped on a sprocket holds a span end [N/m].
+
+    The span's endpoint roller sits on a seat spring k_c and is tied by a link k_l to the next
+    seated roller, which sits on its own seat spring and so on: a ladder whose input stiffness K
+    satisfies K = k_c + k_l K / (k_l + K), i.e. K = (k_c + sqrt(k_c^2 + 4 k_c k_l)) / 2
+    (docs/reduced_models.md, "equivalent series stiffness")."""
+    kc, kl = float(contact_stiffness), float(link_stiffness)
+    return 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
+
+
+class TorsionalModel(Model):
+    """Level 1 (see module docstring)."""
+
+    level: ClassVar[int] = 1
+    name: ClassVar[str] = "torsional"
+    preferred_method: ClassVar[str] = "rk4"
+    n_modes: int = 0
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any]):
+        super().__init__(drive, params)
+        p = self.params
+        from ..parameters import BY_NAME
+        for name in ("chain.link_stiffness", "chain.link_damping", "chain.pretension",
+                     "chain.link_mass", "driver.inertia", "driven.inertia", "driven.damping",
+                     "input_shaft.stiffness", "input_shaft.damping", "input_shaft.rigid",
+                     "contact.stiffness", "torsional.chain_inertia", "torsional.seat_compliance",
+                     "gravity"):
+            p[name] = BY_NAME[name].check(p[name])
+        self.rigid = bool(p["input_shaft.rigid"])
+        self.G = S.geometry_constants(drive)
+        self.P = self._parameter_vector()
+        self._dx = None
+        self._cache_key = None
+        self._cache = None
+
+    # --- construction ----------------------------------------------------------------------
+    @cached_property
+    def reference(self) -> dict[str, float]:
+        """Tooth-period means of the level-0 configuration: link counts, span lengths and
+        directions (used for the constant chain-inertia matrix and the modal basis)."""
+        d = self.drive
+        phi1 = tooth_period_samples(d, 100)
+        g = chain_geometry(d, phi1, driven_rotation(d, phi1).driven_angle)
+        return {"n_up": float(np.mean(g.upper_links)), "n_low": float(np.mean(g.lower_links)),
+                "n_up_min": float(np.min(g.upper_links)),
+                "n_low_min": float(np.min(g.lower_links)),
+                "wrapped_driver": float(np.mean(g.wrapped_driver)),
+                "wrapped_driven": float(np.mean(g.wrapped_driven)),
+                "l_up": float(np.mean(g.upper.length)), "l_low": float(np.mean(g.lower.length)),
+                "dir_up": float(np.mean(g.upper.direction)),
+                "dir_low": float(np.mean(g.lower.direction))}
+
+    def mass_matrix(self) -> np.ndarray:
+        """[[J11, J12], [J12, J22]] of the sprocket rotations [kg m^2] (module docstring).
+
+        Chain inertia (option ``torsional.chain_inertia``): the m_link of each roller seated on
+        a sprocket at its pitch radius; a span of n pitches has n - 1 inner rollers at k/n along
+        it, moving axially with the linear interpolation of its endpoints' chain speeds R w, so
+        sum (1 - k/n)^2 = (n - 1)(2n - 1) / (6n) to each end and sum k/n (1 - k/n)
+        = (n^2 - 1) / (6n) coupling the two (the lumped form of a bar's m/3, m/6 matrix). Link
+        counts are tooth-period means so the matrix is constant (no momentum jumps at events).
+        """
+        p, d = self.params, self.drive
+        j11, j22, j12 = p["driver.inertia"], p["driven.inertia"], 0.0
+        if p["torsional.chain_inertia"]:
+            r = self.reference
+            m = p["chain.link_mass"]
+            rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
+            ends = sum((n - 1) * (2 * n - 1) / (6 * n) for n in (r["n_up"], r["n_low"]))
+            cross = sum((n * n - 1) / (6 * n) for n in (r["n_up"], r["n_low"]))
+            j11 += m * rc * rc * (r["wrapped_driver"] + 1 + ends)
+            j22 += m * ro * ro * (r["wrapped_driven"] + 1 + ends)
+            j12 += m * rc * ro * cross
+        return np.array([[j11, j12], [j12, j22]])
+
+    def series_compliance(self) -> tuple[float, float]:
+        """(extra compliance per span [m/N], extra free length per span [m]) from the seats
+        (option ``torsional.seat_compliance``): two ends, each 1/K_seat and the roller-seat
+        clearance R_t - R_r taken up towards the span."""
+        p = self.params
+        if not p["torsional.seat_compliance"]:
+            return 0.0, 0.0
+        k_seat = seat_stiffness(p["contact.stiffness"], p["chain.link_stiffness"])
+        clearance = max(0.0, p["contact.seat_radius"] - p["chain.roller_radius"])
+        return 2.0 / k_seat, 2.0 * clearance
+
+    def _parameter_vector(self) -> np.ndarray:
+        p, d = self.params, self.drive
+        P = np.zeros(S.P_SIZE)
+        P[S.P_K_LINK] = p["chain.link_stiffness"]
+        P[S.P_C_LINK] = p["chain.link_damping"]
+        P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
+        P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
+        P[S.P_RIGID] = 1.0 if self.rigid else 0.0
+        P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
+        P[S.P_C_SHAFT] = p["input_shaft.damping"]
+        P[S.P_D2] = p["driven.damping"]
+        mm = self.mass_matrix()
+        P[S.P_J11], P[S.P_J12], P[S.P_J22] = mm[0, 0], mm[0, 1], mm[1, 1]
+        P[S.P_RHOA] = p["chain.link_mass"] / d.pitch
+        P[S.P_MODES] = self.n_modes
+        P[S.P_PITCH] = d.pitch
+        return P
+
+    # --- state -----------------------------------------------------------------------------
+    @property
+    def n_sprocket_states(self) -> int:
+        return 2 if self.rigid else 4
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        if self.rigid:
+            return ("driven.angle", "driven.speed")
+        return ("driver.angle", "driven.angle", "driver.speed", "driven.speed")
+
+    def _kernel(self, x, th_in, w_in, a_in, load):
+        dx = np.empty(self.n_states)
+        aux = np.empty(S.A_SIZE)
+        S.evaluate(np.asarray(x, float), float(th_in), float(w_in), float(a_in), float(load),
+                   self.G, self.P, dx, aux)
+        return dx, aux
+
+    def _eval(self, t, x, u: Inputs):
+        key = (t, u.angle, u.speed, u.acceleration, u.torque, x.tobytes())
+        if key != self._cache_key:
+            self._cache = self._kernel(x, u.angle, u.speed, u.acceleration, u.torque)
+            self._cache_key = key
+        return self._cache
+
+    def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
+        dx = np.empty(self.n_states)
+        aux = np.empty(S.A_SIZE)
+        S.evaluate(x, float(u.angle), float(u.speed), float(u.acceleration), float(u.torque),
+                   self.G, self.P, dx, aux)
+        return dx
+
+    def switching_functions(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
+        """Six functions (SWITCH_NAMES): each span's min(k delta, T_raw) (slack when it turns
+        negative) and sin(pi u) of the four span ends' seat coordinates u, whose integer crossings
+        are the release and seating events (a continuous function, so each event is a sign
+        change rather than a jump)."""
+        aux = self._eval(t, np.asarray(x, float), u)[1]
+        return aux[S.A_G_UP:S.A_EV_LE + 1].copy()
+
+    def _modal_initial(self, u: Inputs) -> np.ndarray:
+        return np.empty(0)
+
+    def initial_state(self, u: Inputs) -> np.ndarray:
+        """Rest, in static equilibrium under the load torque ``u.torque`` with the input shaft
+        held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
+        balances the span tensions, found by bracketing from the level-0 configuration."""
+        from scipy.optimize import brentq
+
+        modal = self._modal_initial(u)
+        d = self.drive
+        a_o, a_c = math.pi / d.n_driven, math.pi / d.n_driver
+        phi2_kin = float(driven_rotation(d, u.angle).driven_angle)
+
+        def state(phi1, phi2):
+            if self.rigid:
+                return np.concatenate([[phi2, 0.0], modal])
+            return np.concatenate([[phi1, phi2, 0.0, 0.0], modal])
+
+        def acc2(phi1, phi2):
+            aux = self._kernel(state(phi1, phi2), phi1, 0.0, 0.0, u.torque)[1]
+            return aux[S.A_ACC2] if self.rigid else self._driven_torque(state(phi1, phi2), u)
+
+        def solve_driven(phi1):
+            centre = phi2_kin + (phi1 - u.angle) * d.tooth_ratio
+            lo, hi = centre - 0.5 * a_o, centre + 0.5 * a_o
+            flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
+            for _ in range(20):
+                if flo >= 0 >= fhi:
+                    break
+                lo, hi = lo - a_o, hi + a_o
+                flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
+            else:
+                raise ValueError("no static equilibrium of the driven sprocket under "
+                                 f"load.torque = {u.torque:g} N.m")
+            if flo == 0.0:
+                return lo
+            if fhi == 0.0:
+                return hi
+            return brentq(lambda v: acc2(phi1, v), lo, hi, xtol=1e-15, rtol=1e-15)
+
+        if self.rigid:
+            return state(u.angle, solve_driven(u.angle))
+
+        k_s = self.params["input_shaft.stiffness"]
+
+        def shaft_residual(phi1):
+            phi2 = solve_driven(phi1)
+            x = state(phi1, phi2)
+            aux = self._kernel(x, u.angle, 0.0, 0.0, u.torque)[1]
+            return aux[S.A_ACC1]
+
+        lo, hi = u.angle - 0.5 * a_c, u.angle + 0.5 * a_c
+        for _ in range(20):
+            flo, fhi = shaft_residual(lo), shaft_residual(hi)
+            if flo >= 0 >= fhi:
+                break
+            lo, hi = lo - a_c, hi + a_c
+        else:  # pragma: no cover - the shaft spring always brackets
+            raise ValueError(f"no static equilibrium of the driver on input_shaft.stiffness "
+                             f"= {k_s:g} N.m/rad")
+        phi1 = brentq(shaft_residual, lo, hi, xtol=1e-15, rtol=1e-15)
+        return state(phi1, solve_driven(phi1))
+
+    def _driven_torque(self, x, u):
+        """Net static torque on the driven sprocket (flexible shaft, driver held)."""
+        dx, aux = self._kernel(x, u.angle, 0.0, 0.0, u.torque)
+        mm = self.P
+        # generalised force on the driven sprocket: J21 acc1 + J22 acc2
+        return mm[S.P_J12] * aux[S.A_ACC1] + mm[S.P_J22] * aux[S.A_ACC2]
+
+    # --- capabilities ----------------------------------------------------------------------
+    def static_tension(self) -> float:
+        """Static span tension at rest with no load [N]: the rigid-seat value of level 0
+        (:func:`~chainmodel.models.kinematic.static_span_tension`); with
+        ``torsional.seat_compliance`` the same total stretch X = T0 (n_u + n_l) / k_link is shared
+        with the four seat compliances and reduced by the four clearances:
+        T = (X - 2 s) / ((n_u + n_l) / k_link + 2 c), c and s per span (:meth:`series_compliance`).
+        """
+        t0 = static_span_tension(self.drive, self.params)
+        c, slack = self.series_compliance()
+        if c == 0.0 and slack == 0.0:
+            return t0
+        r = self.reference
+        flex = (r["n_up"] + r["n_low"]) / self.params["chain.link_stiffness"]
+        return max(0.0, (t0 * flex - 2.0 * slack) / (flex + 2.0 * c))
+
+    def stiffness_bound(self) -> np.ndarray:
+        """Linear stiffness matrix of the sprocket rotations with both spans taut, their
+        shortest link counts and arms equal to the pitch radii (an upper bound for stable_step)."""
+        p, d, r = self.params, self.drive, self.reference
+        c, _ = self.series_compliance()
+        rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
+        k = sum(1.0 / (max(n, 1.0) / p["chain.link_stiffness"] + c)
+                for n in (r["n_up_min"], r["n_low_min"]))
+        K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
+        K[0, 0] += p["input_shaft.stiffness"]
+        return K
+
+    def sprocket_frequencies(self) -> np.ndarray:
+        """Undamped natural frequencies of the linearised sprocket equations [rad/s] with the
+        bound stiffness (ascending); rigid shaft: the driven sprocket alone."""
+        K, M = self.stiffness_bound(), self.mass_matrix()
+        if self.rigid:
+            return np.array([math.sqrt(K[1, 1] / M[1, 1])])
+        ev = np.linalg.eigvals(np.linalg.solve(M, K)).real
+        return np.sqrt(np.sort(np.abs(ev)))
+
+    def omega_max(self, x=None) -> float:
+        return float(np.max(self.sprocket_frequencies()))
+
+    def stable_step(self, x: np.ndarray) -> float:
+        return 1.0 / self.omega_max(x)
+
+    def state_scale(self) -> np.ndarray:
+        """Typical magnitudes of the states (absolute tolerances of adaptive steppers are
+        rtol times these): 1e-3 rad and 1 rad/s for the sprockets."""
+        return np.array([1e-3] * (self.n_sprocket_states // 2) + [1.0] * (self.n_sprocket_states // 2))
+
+    # --- outputs ---------------------------------------------------------------------------
+    def output_descriptions(self) -> dict[str, str]:
+        d = super().output_descriptions()
+        d["tight_span.midspan_deflection"] = (QUASI_STATIC + "static sag of the tight span under "
+                                              "gravity at its tension (level 1 spans are straight)")
+        d["chain.max_link_tension"] = QUASI_STATIC + "the larger span tension"
+        d["contact.max_force"] = QUASI_STATIC + "the tight-span tension (the seats are not modelled)"
+        return d
+
+    def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
+        return float(quasi_static_extras(self.drive, self.params, tight, 0.0,
+                                         tight_length)["tight_span.midspan_deflection"])
+
+    def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
+        x = np.asarray(x, float)
+        dx, aux = self._eval(t, x, u)
+        forward = u.speed >= 0.0
+        t_up, t_low = float(aux[S.A_T_UP]), float(aux[S.A_T_LOW])
+        tight, slack = (t_up, t_low) if forward else (t_low, t_up)
+        length = float(aux[S.A_L_UP] if forward else aux[S.A_L_LOW])
+        phi1, w1 = float(aux[S.A_PHI1]), float(aux[S.A_W1])
+        if self.rigid:
+            phi2, w2 = float(x[0]), float(x[1])
+        else:
+            phi2, w2 = float(x[1]), float(x[3])
+        ratio = self.drive.tooth_ratio
+        out = {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
+               "driven.speed": w2, "driven.acceleration": float(aux[S.A_ACC2]),
+               "input_shaft.torque": float(aux[S.A_TAU_IN]),
+               "tight_span.tension": tight, "slack_span.tension": slack,
+               "tight_span.length": length,
+               # at rest the instantaneous ratio is undefined; report the mean (tooth) ratio
+               "velocity_ratio": w2 / w1 if abs(w1) > 1e-9 else ratio,
+               "transmission_error": phi2 - ratio * phi1}
+        out["tight_span.midspan_deflection"] = self._midspan(aux, forward, tight, length)
+        out["chain.max_link_tension"] = max(tight, slack)
+        out["contact.max_force"] = tight
+        return out
+
+    def evaluate_states(self, times, states, inputs) -> dict[str, np.ndarray]:
+        """Outputs for a sequence of (t, x, u) (convenience for post-processing)."""
+        rows = [self.outputs(float(t), np.asarray(x, float), u)
+                for t, x, u in zip(times, states, inputs)]
+        return {o.name: np.array([r[o.name] for r in rows]) for o in ALL_OUTPUTS}
