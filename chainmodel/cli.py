@@ -354,7 +354,8 @@ def cmd_run(args) -> int:
             raise
     summary = result.summary()
     out = dict(summary)
-    out.update({"fidelity_level": int(result.fidelity), "via_fmu": fmu_arg is not None,
+    out.update({"input_speed_rad_s": scene.operating.speed,
+                "fidelity_level": int(result.fidelity), "via_fmu": fmu_arg is not None,
                 "samples": len(result.time), "output_interval_s": scene.output_interval,
                 "drive": drive_dict(scene.drive), "notes": list(scene.notes)})
     written = []
@@ -429,16 +430,20 @@ def _config(c) -> dict[str, float]:
     return {"theta2": c.theta2, "theta3": c.theta3, "theta4": c.theta4}
 
 
-def _approximate(drive, theta4, omega4) -> dict[str, np.ndarray] | None:
-    """Closed-form curves if chainmodel.kinematics.approximate exists (fields as exact())."""
+def _approximate(drive, theta4, omega4) -> tuple[dict[str, np.ndarray] | None, str]:
+    """Closed-form curves (seed 000 eqs 50, 51, 53) if this version has
+    ``chainmodel.kinematics.approximate``, and a note saying why not otherwise."""
     from . import kinematics
     approx = getattr(kinematics, "approximate", None)
     if approx is None:
-        return None
+        try:
+            from .kinematics.approx import approximate as approx
+        except ImportError:
+            return None, "closed-form approximations not available in this version"
     try:
         a = approx(drive, theta4, omega4=omega4, alpha4=0.0)
-    except TypeError:
-        a = approx(drive, theta4)
+    except ValueError as exc:
+        return None, f"closed-form approximations not available for this drive: {exc}"
     out = {}
     if getattr(a, "theta2", None) is not None:
         out["theta2"] = np.asarray(a.theta2, float)
@@ -446,7 +451,7 @@ def _approximate(drive, theta4, omega4) -> dict[str, np.ndarray] | None:
         out["velocity_ratio"] = np.asarray(a.velocity_ratio, float)
     if getattr(a, "alpha2", None) is not None:
         out["driven_acceleration"] = -np.asarray(a.alpha2, float)   # forward positive
-    return out or None
+    return (out, "") if out else (None, "closed-form approximations gave no curves")
 
 
 def kinematics_data(drive, samples: int = 400, speed_rpm: float = 100.0) -> dict[str, Any]:
@@ -485,9 +490,11 @@ def kinematics_data(drive, samples: int = 400, speed_rpm: float = 100.0) -> dict
         "driven_speed": rot.driven_speed,
         "driven_acceleration": rot.driven_acceleration,
     }
-    approx = _approximate(drive, rot.theta4, -w)
+    approx, note = _approximate(drive, rot.theta4, -w)
     if approx:
         out["approximate"] = approx
+    else:
+        out["approximate_note"] = note
     return out
 
 
@@ -540,7 +547,7 @@ def cmd_kinematics(args) -> int:
     sl = np.asarray(data["span_length"])
     rows.append(("span length", f"{np.min(sl):>14.7g} {np.max(sl):>14.7g} {np.mean(sl):>14.7g}   [m]"))
     if "approximate" not in data:
-        rows.append(("note", "closed-form approximations not available in this version"))
+        rows.append(("note", data["approximate_note"]))
     print(_table(rows))
     for what, path in written:
         print(f"wrote {what} to {path}")

@@ -140,7 +140,7 @@ def _draw_geometry(ax, drive, snaps, result) -> None:
 
 def _tight_span_track(drive, snaps, result, t_start: float):
     """Times and positions of the roller that enters the tight span first after ``t_start``,
-    over its traverse of the span (with 20 % margin). Returns (index, t, xy, rigid_xy or None)
+    over its traverse of the span. Returns (index, t, xy, rigid_xy or None)
     or None when there is nothing to show."""
     from .kinematics import chain_geometry
     times = np.array([t for t, _ in snaps])
@@ -160,7 +160,8 @@ def _tight_span_track(drive, snaps, result, t_start: float):
     if not speed > 0:
         return None
     chain_speed = speed * drive.n_driver * drive.pitch / (2 * math.pi)
-    traverse = 1.2 * drive.x_c / chain_speed
+    # from the driven endpoint to the seat on the driver: one span length at the chain speed
+    traverse = float(np.mean(result["tight_span.length"])) / chain_speed
     sel = [k for k in range(first, len(snaps)) if snaps[k][0] <= t0 + traverse]
     if len(sel) < 3 or any(len(snaps[k][1]) <= index for k in sel):
         return None
@@ -182,19 +183,23 @@ def _tight_span_track(drive, snaps, result, t_start: float):
 
 
 def _draw_track(fig, cell, track) -> None:
+    """x and y of the tracked roller: its deviation from the rigid chain's roller (the
+    vibration) when the rigid layout numbers rollers the same way, else the raw coordinates."""
     index, t, xy, rigid = track
     sub = cell.subgridspec(2, 1, hspace=0.05)
     ax_x = fig.add_subplot(sub[0])
     ax_y = fig.add_subplot(sub[1], sharex=ax_x)
     for k, (ax, name) in enumerate(((ax_x, "x"), (ax_y, "y"))):
-        ax.plot(t, 1e3 * xy[:, k], color="C0", lw=1.0, label="model")
         if rigid is not None:
-            ax.plot(t, 1e3 * rigid[:, k], color="0.5", ls="--", lw=0.8, label="rigid chain")
-        ax.set_ylabel(f"{name} [mm]")
+            ax.plot(t, 1e3 * (xy[:, k] - rigid[:, k]), color="C0", lw=1.0)
+            ax.set_ylabel(f"Δ{name} [mm]")
+        else:
+            ax.plot(t, 1e3 * xy[:, k], color="C0", lw=1.0)
+            ax.set_ylabel(f"{name} [mm]")
         ax.grid(alpha=0.3)
-    ax_x.set_title(f"roller {index} crossing the tight span")
+    what = "minus the rigid chain's" if rigid is not None else "position"
+    ax_x.set_title(f"roller {index} crossing the tight span ({what})")
     ax_x.tick_params(labelbottom=False)
-    ax_x.legend(fontsize="small")
     ax_y.set_xlabel("time [s]")
 
 
