@@ -105,9 +105,12 @@ def preset(name: str, **overrides) -> Drive:
     if "centre_distance" in spec:
         return Drive.from_centre_distance(spec["n_driver"], spec["n_driven"], spec["pitch"],
                                           spec["centre_distance"], spec.get("links"), name=name)
-    if "span_pitches" not in spec:
-        spec.update(span_pitches=cat[name].get("span_pitches"),
-                    pitch_fraction=cat[name].get("pitch_fraction"))
+    if "span_pitches" not in spec or "pitch_fraction" not in spec:
+        # a preset defined by its centre distance (xu2010) with only N or only f overridden:
+        # the other one comes from the preset's own geometry
+        base = preset(name)
+        spec.setdefault("span_pitches", base.span_pitches)
+        spec.setdefault("pitch_fraction", base.pitch_fraction)
     return Drive(spec["n_driver"], spec["n_driven"], spec["pitch"], spec["span_pitches"],
                  spec["pitch_fraction"], spec.get("links"), name=name)
 

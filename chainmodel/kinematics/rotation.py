@@ -56,7 +56,13 @@ def driver_contact_angle(drive: Drive, driver_angle):
     two_a = 2 * math.pi / drive.n_driver
     phi = np.asarray(driver_angle, float)
     k = np.floor(phi / two_a)
-    return s.theta4 - (phi - k * two_a), k.astype(np.int64)
+    raw = s.theta4 - (phi - k * two_a)
+    # Round-off can leave phi - k two_a a hair outside [0, two_a) (phi / two_a rounds to a whole
+    # number from below); exact() maps theta4 into its period with fb.in_period, so count k
+    # from the period that mapping picks, or phi2 is off by a whole driven tooth at that sample.
+    t4 = fb.in_period(drive, raw)
+    k = k - np.round((raw - t4) / two_a)
+    return t4, k.astype(np.int64)
 
 
 def _forward(drive: Drive, phi, speed, accel) -> Rotation:
