@@ -4,6 +4,7 @@ from .base import (ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, Inputs, Model, Outp
                    SimulationDiverged)
 from .kinematic import KinematicModel
 from .torsional import TorsionalModel
+from .modal import ModalModel
 
 __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "OutputSpec",
            "SimulationDiverged", "KinematicModel", "MODEL_CLASSES", "model_class"]
@@ -11,6 +12,7 @@ __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "O
 #: level -> model class; levels register here as they are implemented
 MODEL_CLASSES: dict[int, type[Model]] = {0: KinematicModel}
 MODEL_CLASSES[1] = TorsionalModel
+MODEL_CLASSES[2] = ModalModel
 
 
 def model_class(level: int) -> type[Model]:

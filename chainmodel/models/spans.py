@@ -361,3 +361,183 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     aux[A_W1] = w1
     aux[A_N_UP] = nu
     aux[A_N_LOW] = nl
+
+
+# --- compiled fixed-step integration over one communication step -----------------------------
+# Inputs inside the step: the input-shaft angle as the cubic Hermite interpolant of the source's
+# (angle, speed) at both ends and its acceleration the interpolant's second derivative (or the
+# source's value when it is the same at both ends); the load torque linear between the ends.
+# That is exact for a held input (FMU) and for the scenes' ramp profiles whenever the ramp ends on
+# a communication point; the Python steppers sample the source itself.
+C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
+
+
+@jit
+def _inputs(t, c):
+    dt = c[C_DT]
+    s = (t - c[C_T0]) / dt
+    s2 = s * s
+    s3 = s2 * s
+    a0 = c[C_A0]
+    a1 = c[C_A1]
+    w0 = c[C_W0]
+    w1 = c[C_W1]
+    th = ((2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (3 * s2 - 2 * s3) * a1
+          + (s3 - s2) * dt * w1)
+    w = ((6 * s2 - 6 * s) / dt * a0 + (3 * s2 - 4 * s + 1) * w0 + (6 * s - 6 * s2) / dt * a1
+         + (3 * s2 - 2 * s) * w1)
+    if c[C_ACC0] == c[C_ACC1]:
+        acc = c[C_ACC0]     # held or constant: the source's own value
+    else:
+        acc = ((12 * s - 6) * a0 + (6 * s - 4) * dt * w0 + (6 - 12 * s) * a1
+               + (6 * s - 2) * dt * w1) / (dt * dt)
+    load = c[C_L0] + (c[C_L1] - c[C_L0]) * s
+    return th, w, acc, load
+
+
+@jit
+def _rhs_at(t, x, c, G, P, dx, aux):
+    th, w, acc, load = _inputs(t, c)
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
+
+
+@jit
+def _rk4(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
+    n = x.size
+    _rhs_at(t, x, c, G, P, k1, aux)
+    for i in range(n):
+        tmp[i] = x[i] + 0.5 * h * k1[i]
+    _rhs_at(t + 0.5 * h, tmp, c, G, P, k2, aux)
+    for i in range(n):
+        tmp[i] = x[i] + 0.5 * h * k2[i]
+    _rhs_at(t + 0.5 * h, tmp, c, G, P, k3, aux)
+    for i in range(n):
+        tmp[i] = x[i] + h * k3[i]
+    _rhs_at(t + h, tmp, c, G, P, k4, aux)
+    for i in range(n):
+        out[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+
+
+@jit
+def _switch(t, x, c, G, P, dx, aux, g):
+    _rhs_at(t, x, c, G, P, dx, aux)
+    for i in range(6):
+        g[i] = aux[A_G_UP + i]
+
+
+@jit
+def _changed(g, g0):
+    for i in range(g.size):
+        if g[i] * g0[i] < 0.0 and g[i] != 0.0 and g0[i] != 0.0:
+            return True
+    return False
+
+
+@jit
+def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
+    """``n_steps`` RK4 steps of size h from (t0, x0) with the six switching functions located
+    by safeguarded regula falsi (the algorithm of chainmodel.integrate.FixedStepper._bisect, to
+    1e-12 s). Returns (x, events, rhs_evaluations); located event times go to
+    ``event_times[:events]`` (as many as fit)."""
+    n = x0.size
+    x = x0.copy()
+    xn = np.empty(n)
+    xm = np.empty(n)
+    xh = np.empty(n)
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    aux = np.empty(A_SIZE)
+    g0 = np.empty(6)
+    g1 = np.empty(6)
+    gh = np.empty(6)
+    gm = np.empty(6)
+    glo = np.empty(6)
+    flo = np.empty(6)
+    fhi = np.empty(6)
+    evals = 0
+    events = 0
+    t = t0
+    _switch(t, x, c, G, P, k1, aux, g0)
+    evals += 1
+    tol = 1e-12 * max(1.0, h)
+    for _ in range(n_steps):
+        _rk4(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
+        _switch(t + h, xn, c, G, P, k1, aux, g1)
+        evals += 5
+        if _changed(g1, g0):
+            lo = 0.0
+            hi = h
+            for i in range(n):
+                xh[i] = xn[i]
+            for i in range(6):
+                gh[i] = g1[i]
+                glo[i] = g0[i]
+                flo[i] = g0[i]
+                fhi[i] = g1[i]
+            side = 0
+            for _it in range(100):
+                if hi - lo <= tol:
+                    break
+                mid = 1.0e300
+                for i in range(6):
+                    if gh[i] * g0[i] < 0.0 and gh[i] != 0.0 and g0[i] != 0.0:
+                        den = flo[i] - fhi[i]
+                        if den != 0.0:
+                            r = lo + (hi - lo) * flo[i] / den
+                            if r < mid:
+                                mid = r
+                margin = 1e-3 * (hi - lo)
+                if mid == 1.0e300 or not math.isfinite(mid):
+                    mid = 0.5 * (lo + hi)
+                elif mid < lo + margin:
+                    mid = lo + margin
+                elif mid > hi - margin:
+                    mid = hi - margin
+                _rk4(t, x, mid, c, G, P, k1, k2, k3, k4, tmp, aux, xm)
+                _switch(t + mid, xm, c, G, P, k1, aux, gm)
+                evals += 5
+                if _changed(gm, g0):
+                    hi = mid
+                    for i in range(n):
+                        xh[i] = xm[i]
+                    for i in range(6):
+                        gh[i] = gm[i]
+                        fhi[i] = gm[i]
+                        if side == -1:
+                            flo[i] = 0.5 * flo[i]
+                    side = -1
+                else:
+                    lo = mid
+                    for i in range(6):
+                        glo[i] = gm[i]
+                        flo[i] = gm[i]
+                        if side == 1:
+                            fhi[i] = 0.5 * fhi[i]
+                    side = 1
+            if events < event_times.size:
+                event_times[events] = t + hi
+            events += 1
+            rest = h - hi
+            if rest > 0.0:
+                _rk4(t + hi, xh, rest, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
+                evals += 4
+            else:
+                for i in range(n):
+                    xn[i] = xh[i]
+            _switch(t + h, xn, c, G, P, k1, aux, g1)
+            evals += 1
+        t += h
+        for i in range(n):
+            x[i] = xn[i]
+        for i in range(6):
+            g0[i] = g1[i]
+        finite = True
+        for i in range(n):
+            if not math.isfinite(x[i]):
+                finite = False
+        if not finite:
+            break
+    return x, events, evals

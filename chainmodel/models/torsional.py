@@ -272,6 +272,22 @@ class TorsionalModel(Model):
         # generalised force on the driven sprocket: J21 acc1 + J22 acc2
         return mm[S.P_J12] * aux[S.A_ACC1] + mm[S.P_J22] * aux[S.A_ACC2]
 
+    # --- compiled stepping ------------------------------------------------------------------
+    def advance_compiled(self, method, t0, t1, x, h, source):
+        """The RK4 loop of :class:`chainmodel.integrate.RK4` over one communication step in
+        compiled code (numba), or None when not available (other methods, no numba). Returns
+        (x, steps, events, rhs_evaluations, event_times)."""
+        if method != "rk4" or not S.NUMBA:
+            return None
+        n = max(1, math.ceil((t1 - t0) / h - 1e-9))
+        u0, u1 = source(t0), source(t1)
+        c = np.array([t0, t1 - t0, u0.angle, u0.speed, u1.angle, u1.speed, u0.acceleration,
+                      u1.acceleration, u0.torque, u1.torque], float)
+        times = np.empty(16)
+        x_new, events, evals = S.rk4_advance(np.asarray(x, float), float(t0), n, (t1 - t0) / n,
+                                             c, self.G, self.P, times)
+        return x_new, n, int(events), int(evals), list(times[:min(int(events), times.size)])
+
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N]: the rigid-seat value of level 0

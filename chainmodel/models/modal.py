@@ -1,0 +1,159 @@
+"""Level 2: the modal model. Level 1 plus transverse Galerkin modes of both spans (seed 004
+sections 5.2-5.8, eqs 57-65), in dimensional form.
+
+Each span is an axially moving string of mass per length rho A = m_link / p moving at the chain
+speed S = n_c p w1 / 2 pi, between endpoints whose transverse motion Y1, Y2 comes from the chain
+geometry as the sprockets turn (the y1, y2 of eq 38). Its transverse deflection from the chord
+between the endpoints is w(x, t) = sum_m q_m(t) sin(m pi x / lbar) (eq 57), lbar the span's mean
+length, and the Galerkin equations (eq 58 in dimensional form) are::
+
+    q_m'' + (2 S / lbar) sum_n C_mn q_n' + ((T - rho A S^2) / rho A) (m pi / lbar)^2 q_m
+        + 2 zeta m omega_1 q_m' = -(G_m - E_m) Y1'' - E_m Y2'' - (2 S / lbar)(Y2' - Y1') G_m
+                                  + g_n G_m
+
+with T the span's tension including the modal stretching sum (m pi)^2 q_m^2 / (4 lbar) (eq 46:
+the parametric coupling through the sprocket rotations, the wrapping-length variation p_o* and
+the cubic stiffening kappa_m all come from this one tension), and that same tension acts on the
+sprockets (eq 56's integral term). g_n: gravity across the span (0 in seed 004). The endpoint
+velocities jump at every seating and release (eq 63); the state carries the projection of the
+material transverse velocity, v_m = q_m' + (G_m - E_m) Y1' + E_m Y2', which does not jump, so the
+impulses need no state resets (docs/reduced_models.md, "endpoint motion").
+
+Option ``modal.impulse_forcing``: replace the kinematic endpoint motion by the impulse-train
+idealisation of eqs 63-65 (pulses Q = S p / R at each release from the driven sprocket and each
+seating on the driver, the s-terms dropped, the trains' mean kept as the paper's k_0 term).
+
+Departures from the printed equations (docs/reduced_models.md): C_mn has k^2 - j^2 in its
+denominator (skew-symmetric; eq 59 prints a +), and the 2 s (y2' - y1') term enters eq 58 with the
+sign of eq 47.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from ..geometry import Drive
+from . import spans as S
+from .base import Inputs, SimulationDiverged
+from .torsional import TorsionalModel
+
+__all__ = ["ModalModel", "galerkin_coefficients"]
+
+
+def galerkin_coefficients(modes: int) -> dict[str, np.ndarray]:
+    """G_m, E_m (seed 004 eq 59) and the skew-symmetric C_mn for m, n = 1..modes."""
+    m = np.arange(1, modes + 1, dtype=float)
+    g = 2 * (1 - (-1.0) ** m) / (m * np.pi)
+    e = -2 * (-1.0) ** m / (m * np.pi)
+    k, j = np.meshgrid(m, m, indexing="ij")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(k == j, 0.0, 2 * k * j * (1 - (-1.0) ** (k + j)) / (k * k - j * j))
+    return {"G": g, "E": e, "C": c}
+
+
+class ModalModel(TorsionalModel):
+    """Level 2 (see module docstring)."""
+
+    level: ClassVar[int] = 2
+    name: ClassVar[str] = "modal"
+    preferred_method: ClassVar[str] = "rk4"
+    second_order: ClassVar[bool] = False
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any]):
+        from ..parameters import BY_NAME
+        params = dict(params)
+        for name in ("modal.modes", "modal.damping_ratio", "modal.impulse_forcing"):
+            params[name] = BY_NAME[name].check(params[name])
+        self.n_modes = int(params["modal.modes"])
+        super().__init__(drive, params)
+        t0 = self.static_tension()
+        if not t0 > 0.0:
+            raise ValueError(
+                f"the modal model (level 2) needs both spans in tension at rest, but the static "
+                f"span tension is {t0:g} N (a string without tension has no transverse "
+                f"stiffness): raise chain.pretension (now {self.params['chain.pretension']:g} N) "
+                f"or shorten drive.centre_distance")
+        self._fill_modal_parameters(t0)
+
+    def _fill_modal_parameters(self, t0: float) -> None:
+        p, d, r, P = self.params, self.drive, self.reference, self.P
+        rho = p["chain.link_mass"] / d.pitch
+        P[S.P_LBAR_U], P[S.P_LBAR_L] = r["l_up"], r["l_low"]
+        P[S.P_ZETA] = p["modal.damping_ratio"]
+        P[S.P_W1_U] = math.pi / r["l_up"] * math.sqrt(t0 / rho)
+        P[S.P_W1_L] = math.pi / r["l_low"] * math.sqrt(t0 / rho)
+        P[S.P_IMPULSE] = 1.0 if p["modal.impulse_forcing"] else 0.0
+        P[S.P_REF_U], P[S.P_REF_L] = r["dir_up"], r["dir_low"]
+        # gravity in the XY frame: the line of centres OC (angle theta1 in XY) is inclined by
+        # drive.inclination above the horizontal, so "up" is i exp(i (theta1 - inclination))
+        up = 1j * np.exp(1j * (d.centre_angle - p["drive.inclination"]))
+        g_vec = -p["gravity"] * up
+        for idx, ref in ((S.P_GN_U, r["dir_up"]), (S.P_GN_L, r["dir_low"])):
+            normal = 1j * np.exp(1j * ref)          # positive away from the line of centres
+            P[idx] = float((np.conj(normal) * g_vec).real)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        n = self.n_modes
+        names = list(super().state_names)
+        k = len(names) // 2
+        modal = ([f"tight_span.q{i}" for i in range(1, n + 1)]
+                 + [f"slack_span.q{i}" for i in range(1, n + 1)]
+                 + [f"tight_span.v{i}" for i in range(1, n + 1)]
+                 + [f"slack_span.v{i}" for i in range(1, n + 1)])
+        return tuple(names[:k] + names[k:] + modal)
+
+    def modal_frequencies(self, tension: float, speed: float = 0.0, span: str = "upper") -> np.ndarray:
+        """Linear frequencies of the span modes at a given tension and chain speed [rad/s]:
+        omega_m = (m pi / lbar) sqrt((T - rho A S^2) / rho A) (seed 004 eq 61, dimensional)."""
+        rho = self.params["chain.link_mass"] / self.drive.pitch
+        lbar = self.reference["l_up" if span == "upper" else "l_low"]
+        m = np.arange(1, self.n_modes + 1)
+        return m * math.pi / lbar * math.sqrt(max(tension - rho * speed * speed, 0.0) / rho)
+
+    def _modal_initial(self, u: Inputs) -> np.ndarray:
+        """Static sag under gravity at the static tension (linear), zero velocities."""
+        n, P = self.n_modes, self.P
+        g = galerkin_coefficients(n)["G"]
+        t0 = self.static_tension()
+        q_u = P[S.P_GN_U] * g / self.modal_frequencies(t0, 0.0, "upper") ** 2
+        q_l = P[S.P_GN_L] * g / self.modal_frequencies(t0, 0.0, "lower") ** 2
+        return np.concatenate([q_u, q_l, np.zeros(2 * n)])
+
+    def omega_max(self, x=None) -> float:
+        # span modes at four times the static tension (the tight span carries the load too)
+        w_modes = float(np.max(self.modal_frequencies(4.0 * self.static_tension(), 0.0, "upper")))
+        w_modes = max(w_modes, float(np.max(self.modal_frequencies(4.0 * self.static_tension(),
+                                                                     0.0, "lower"))))
+        return max(super().omega_max(x), w_modes)
+
+    def state_scale(self) -> np.ndarray:
+        n = self.n_modes
+        return np.concatenate([super().state_scale(), np.full(2 * n, 1e-4), np.full(2 * n, 1e-2)])
+
+    def check(self, t: float, x: np.ndarray) -> None:
+        super().check(t, x)
+        base = self.n_sprocket_states
+        q = np.abs(x[base:base + 2 * self.n_modes])
+        limit = 0.1 * min(self.reference["l_up"], self.reference["l_low"])
+        if q.size and np.max(q) > limit:
+            raise SimulationDiverged(
+                f"modal model: a span's transverse amplitude reached {np.max(q):.3g} m at "
+                f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; a span "
+                "has probably gone slack (level 2 needs both spans in tension: raise "
+                "chain.pretension) or is in a parametric instability without enough damping "
+                "(modal.damping_ratio)")
+
+    def output_descriptions(self) -> dict[str, str]:
+        d = super().output_descriptions()
+        from .base import EXTRA_OUTPUTS
+        d["tight_span.midspan_deflection"] = next(
+            o.description for o in EXTRA_OUTPUTS if o.name == "tight_span.midspan_deflection") + (
+            " (sum of the span's Galerkin modes at its middle)")
+        return d
+
+    def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
+        return float(aux[S.A_MID_UP] if forward else aux[S.A_MID_LOW])
