@@ -1,0 +1,371 @@
+#!/usr/bin/env python
+"""Build dist/ChainDrive.fmu (FMI 2.0 co-simulation) from fmu_src/ChainDrive.py with pythonfmu.
+
+    python build_fmu.py                     # -> dist/ChainDrive.fmu, validated with fmpy
+    python build_fmu.py --out some/dir/X.fmu
+    python build_fmu.py --reference         # also regenerate docs/fmu_reference.csv (regression
+                                            # reference produced by the FMU just built)
+    python build_fmu.py --doc               # also rewrite the variable table in docs/fmu.md
+
+Steps:
+1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` (the adapter
+   imports it from there under a private name, so the FMU needs only numpy, scipy and pythonfmu);
+2. let pythonfmu build the FMU (adapter, its own pythonfmu copy, the binaries, documentation/);
+3. complete the modelDescription.xml pythonfmu writes: unit definitions with SI base units and
+   display units, a unit on every Real, min/max of the parameters, explicit causality /
+   variability / initial, output descriptions that say at which fidelity levels each output is
+   a quasi-static estimate, ModelStructure Outputs and InitialUnknowns, DefaultExperiment and
+   the capability flags (variable step, get/set and serialize state);
+4. check the result with ``fmpy.validation.validate_fmu``; any problem fails the build.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import html
+import math
+import re
+import shutil
+import sys
+import tempfile
+import zipfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # describe the chainmodel we vendor, not another installed one
+
+ADAPTER = HERE / "fmu_src" / "ChainDrive.py"
+DEFAULT_OUT = HERE / "dist" / "ChainDrive.fmu"
+REFERENCE_CSV = HERE / "docs" / "fmu_reference.csv"
+DOC_MD = HERE / "docs" / "fmu.md"
+
+#: SI base-unit exponents of the unit symbols the schema and the outputs use
+BASE = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "A": {"A": 1},
+        "K": {"K": 1}, "mol": {"mol": 1}, "cd": {"cd": 1},
+        "N": {"kg": 1, "m": 1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2},
+        "W": {"kg": 1, "m": 2, "s": -3}, "Pa": {"kg": 1, "m": -1, "s": -2}, "Hz": {"s": -1}}
+#: display units: name -> (unit, factor) with value_display = factor * value
+DISPLAY = {"mm": ("m", 1000.0), "deg": ("rad", 180.0 / math.pi),
+           "rpm": ("rad/s", 60.0 / (2.0 * math.pi))}
+#: inputs and outputs shown in rpm by tools that honour displayUnit
+SPEED_DISPLAY = {"input_shaft.speed": "rpm", "driver.speed": "rpm", "driven.speed": "rpm"}
+CAPABILITIES = {"needsExecutionTool": "true",   # a Python with numpy and scipy
+                "canHandleVariableCommunicationStepSize": "true",
+                "canInterpolateInputs": "false", "maxOutputDerivativeOrder": "0",
+                "canRunAsynchronuously": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
+                "canNotUseMemoryManagementFunctions": "true", "canGetAndSetFMUstate": "true",
+                "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false"}
+
+
+def base_unit(unit: str) -> dict[str, int]:
+    """SI base-unit exponents of a unit written like 'N.m.s/rad', 'm/s2', 'kg.m2' ('1': none)."""
+    if unit in ("", "1"):
+        return {}
+    if unit.count("/") > 1:
+        raise ValueError(f"unit {unit!r}: write at most one '/'")
+    exps: dict[str, int] = {}
+    for sign, part in zip((1, -1), unit.split("/")):
+        for factor in part.split("."):
+            m = re.fullmatch(r"([A-Za-z]+)(-?\d+)?", factor)
+            if not m or m.group(1) not in BASE:
+                raise ValueError(f"unit {unit!r}: unknown symbol {factor!r}; add it to "
+                                 "build_fmu.BASE")
+            power = sign * int(m.group(2) or 1)
+            for b, e in BASE[m.group(1)].items():
+                exps[b] = exps.get(b, 0) + e * power
+    return {b: e for b, e in exps.items() if e}
+
+
+def fmt(value: float) -> str:
+    """Shortest exact text of a float (repr), as FMI tools parse it back to the same double."""
+    text = repr(float(value))
+    return text[:-2] if text.endswith(".0") and "e" not in text else text
+
+
+# --- metadata from the library ---------------------------------------------------------------
+
+def library_metadata() -> dict:
+    """Units, display units and output notes from the chainmodel being vendored."""
+    import chainmodel
+    from chainmodel import parameters as P
+    from chainmodel.models import ALL_OUTPUTS, MODEL_CLASSES
+    from chainmodel.models.base import QUASI_STATIC
+    from chainmodel.scene import drive_from_parameters
+
+    units = {o.name: o.unit or "1" for o in ALL_OUTPUTS}
+    units.update({"input_shaft.angle": "rad", "input_shaft.speed": "rad/s", "load.torque": "N.m"})
+    display = dict(SPEED_DISPLAY)
+    for p in P.PARAMETERS:
+        if p.kind is float:
+            units[p.name] = p.unit or "1"
+            if p.display_unit:
+                display[p.name] = p.display_unit
+    params = P.validate({})
+    drive = drive_from_parameters(params, "defaults")
+    quasi = {o.name: [] for o in ALL_OUTPUTS}
+    levels = sorted(MODEL_CLASSES)
+    for level in levels:
+        try:
+            descriptions = MODEL_CLASSES[level](drive, dict(params, fidelity=level)).output_descriptions()
+        except Exception as exc:  # a level under construction must not break the build
+            print(f"warning: cannot describe fidelity {level}: {exc}", file=sys.stderr)
+            continue
+        for name, text in descriptions.items():
+            if name in quasi and text.startswith(QUASI_STATIC):
+                quasi[name].append(level)
+    notes = {}
+    for o in ALL_OUTPUTS:
+        text = f"{o.description} [{o.unit or '1'}]"
+        q = quasi[o.name]
+        computed = [k for k in levels if k not in q]
+        if q:
+            text += ("; quasi-static estimate at fidelity " + ", ".join(map(str, q))
+                     + (", computed at " + ", ".join(map(str, computed)) if computed else ""))
+        notes[o.name] = text
+    return {"units": units, "display": display, "output_notes": notes, "levels": levels,
+            "names": P.FIDELITY_NAMES, "version": chainmodel.__version__,
+            "parameters": {p.name: p for p in P.PARAMETERS}}
+
+
+# --- modelDescription.xml --------------------------------------------------------------------
+
+def complete_model_description(xml: bytes, meta: dict) -> bytes:
+    """Add what pythonfmu does not write (see the module docstring)."""
+    root = ET.fromstring(xml)
+    root.set("variableNamingConvention", "structured")
+    root.set("generationTool", root.get("generationTool", "PythonFMU") + " + build_fmu.py")
+    root.set("version", meta["version"])
+    levels = ", ".join(f"{k} ({meta['names'][k]})" for k in meta["levels"])
+    root.set("description", root.get("description", "") + f" Levels in this build: {levels}.")
+    cosim = root.find("CoSimulation")
+    for key, value in CAPABILITIES.items():
+        cosim.set(key, value)
+
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    units, display, params = meta["units"], meta["display"], meta["parameters"]
+    used: dict[str, set] = {}
+    outputs = []
+    for index, sv in enumerate(variables, start=1):
+        name = sv.get("name")
+        typ = next(iter(sv))
+        causality = sv.get("causality") or "local"
+        if causality == "output":
+            outputs.append(index)
+            sv.set("description", meta["output_notes"][name])
+            sv.set("variability", "continuous")
+            sv.set("initial", "calculated")
+        elif causality == "input":
+            sv.set("variability", "continuous")
+            sv.attrib.pop("initial", None)
+        elif causality == "parameter":
+            sv.set("initial", "exact")
+        if not sv.get("description"):
+            raise SystemExit(f"build_fmu: variable {name} has no description")
+        if typ.tag == "Real":
+            unit = units.get(name)
+            if unit is None:
+                raise SystemExit(f"build_fmu: no unit known for Real variable {name}")
+            typ.set("unit", unit)
+            used.setdefault(unit, set())
+            if name in display:
+                du = display[name]
+                if du not in DISPLAY or DISPLAY[du][0] != unit:
+                    raise SystemExit(f"build_fmu: display unit {du!r} of {name} is not defined "
+                                     f"for unit {unit!r}; add it to build_fmu.DISPLAY")
+                typ.set("displayUnit", du)
+                used[unit].add(du)
+            if name in params:   # exact default (pythonfmu rounds to 16 digits)
+                typ.set("start", fmt(params[name].default))
+            elif typ.get("start") is not None:
+                typ.set("start", fmt(float(typ.get("start"))))
+        if name in params and typ.tag in ("Real", "Integer"):
+            p = params[name]
+            conv = fmt if typ.tag == "Real" else (lambda v: str(int(v)))
+            if p.minimum is not None:
+                typ.set("min", conv(p.minimum))
+            if p.maximum is not None:
+                typ.set("max", conv(p.maximum))
+    # every unit the build knows a display unit for offers it
+    for du, (unit, _) in DISPLAY.items():
+        if unit in used:
+            used[unit].add(du)
+
+    unit_defs = ET.Element("UnitDefinitions")
+    for unit in sorted(used):
+        u = ET.SubElement(unit_defs, "Unit", name=unit)
+        ET.SubElement(u, "BaseUnit", {k: str(v) for k, v in sorted(base_unit(unit).items())})
+        for du in sorted(used[unit]):
+            ET.SubElement(u, "DisplayUnit", name=du, factor=fmt(DISPLAY[du][1]))
+
+    structure = ET.Element("ModelStructure")
+    outs = ET.SubElement(structure, "Outputs")
+    init = ET.SubElement(structure, "InitialUnknowns")
+    for index in outputs:   # no dependencies attribute: may depend on every input (feedthrough)
+        ET.SubElement(outs, "Unknown", index=str(index))
+        ET.SubElement(init, "Unknown", index=str(index))
+
+    default = root.find("DefaultExperiment")
+    if default is None:
+        raise SystemExit("build_fmu: the adapter defines no default experiment")
+    for key in ("startTime", "stopTime", "stepSize", "tolerance"):
+        if default.get(key) is not None:
+            default.set(key, fmt(float(default.get(key))))
+
+    # schema order: CoSimulation, UnitDefinitions, LogCategories, DefaultExperiment,
+    # ModelVariables, ModelStructure
+    keep = {child.tag: child for child in root}
+    for child in list(root):
+        root.remove(child)
+    for tag in ("CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment",
+                "ModelVariables", "ModelStructure"):
+        node = {"UnitDefinitions": unit_defs, "ModelStructure": structure}.get(tag, keep.get(tag))
+        if node is not None:
+            root.append(node)
+    ET.indent(root, space="  ")
+    return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8")
+
+
+# --- documentation ---------------------------------------------------------------------------
+
+def markdown_to_html(text: str, title: str) -> str:
+    """Enough Markdown for docs/fmu.md: headings, paragraphs, lists, tables, code blocks."""
+    out, para, in_code, in_list, table = [], [], False, False, []
+
+    def inline(s):
+        s = html.escape(s)
+        s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
+        s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
+        return re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r'<a href="\2">\1</a>', s)
+
+    def flush():
+        nonlocal para, in_list, table
+        if para:
+            out.append("<p>" + inline(" ".join(para)) + "</p>")
+            para = []
+        if in_list:
+            out.append("</ul>")
+            in_list = False
+        if table:
+            rows = [r for r in table if not re.fullmatch(r"\|[\s:|-]+\|?", r)]
+            cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows]
+            out.append("<table>")
+            for i, row in enumerate(cells):
+                tag = "th" if i == 0 else "td"
+                out.append("<tr>" + "".join(f"<{tag}>{inline(c)}</{tag}>" for c in row) + "</tr>")
+            out.append("</table>")
+            table = []
+
+    for line in text.splitlines():
+        if line.startswith("```"):
+            flush()
+            out.append("</pre>" if in_code else "<pre>")
+            in_code = not in_code
+        elif in_code:
+            out.append(html.escape(line))
+        elif line.startswith("#"):
+            flush()
+            level = len(line) - len(line.lstrip("#"))
+            out.append(f"<h{level}>{inline(line[level:].strip())}</h{level}>")
+        elif line.startswith("|"):
+            if para:
+                flush()
+            table.append(line)
+        elif re.match(r"\s*[-*] ", line):
+            if para or table:
+                flush()
+            if not in_list:
+                out.append("<ul>")
+                in_list = True
+            out.append("<li>" + inline(re.sub(r"^\s*[-*] ", "", line)) + "</li>")
+        elif not line.strip():
+            flush()
+        else:
+            if table:
+                flush()
+            para.append(line.strip())
+    flush()
+    body = "\n".join(out)
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{html.escape(title)}"
+            "</title><style>body{font-family:sans-serif;max-width:60em;margin:auto}"
+            "table{border-collapse:collapse}td,th{border:1px solid #aaa;padding:2px 6px}"
+            "pre{background:#f4f4f4;padding:6px}</style></head><body>\n"
+            f"{body}\n</body></html>\n")
+
+
+def stage_documentation(dest: Path) -> None:
+    dest.mkdir(parents=True)
+    text = DOC_MD.read_text() if DOC_MD.is_file() else (
+        "# ChainDrive FMU\n\nSee docs/fmu.md in the ChainDrive repository.\n")
+    (dest / "index.html").write_text(markdown_to_html(text, "ChainDrive FMU"))
+    if REFERENCE_CSV.is_file():
+        shutil.copy2(REFERENCE_CSV, dest / "ChainDrive_ref.csv")
+
+
+# --- build -----------------------------------------------------------------------------------
+
+def build(out: Path = DEFAULT_OUT, quiet: bool = False) -> Path:
+    """Build, complete and validate the FMU at ``out``; return its path."""
+    from pythonfmu import FmuBuilder
+
+    out = Path(out).resolve()
+    meta = library_metadata()
+    with tempfile.TemporaryDirectory(prefix="chaindrive_build_") as tmp:
+        tmp = Path(tmp)
+        vendor = tmp / "_vendor"
+        shutil.copytree(HERE / "chainmodel", vendor / "chainmodel",
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
+        stage_documentation(tmp / "documentation")
+        raw = FmuBuilder.build_FMU(ADAPTER, dest=tmp / "raw", project_files=[vendor],
+                                   documentation_folder=tmp / "documentation",
+                                   canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(raw) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
+            for info in src.infolist():
+                data = src.read(info.filename)
+                if info.filename == "modelDescription.xml":
+                    data = complete_model_description(data, meta)
+                dst.writestr(info.filename, data)
+    from fmpy.validation import validate_fmu
+    problems = validate_fmu(str(out))
+    if problems:
+        raise SystemExit("build_fmu: the FMU does not validate:\n  " + "\n  ".join(problems))
+    if not quiet:
+        print(f"wrote {out} (fidelity levels {', '.join(map(str, meta['levels']))}; "
+              "fmpy validation: no problem)")
+    return out
+
+
+def write_reference(fmu: Path, path: Path = REFERENCE_CSV) -> Path:
+    """Regression reference: the xu2010 scene at fidelity 0 for 0.2 s, run through the FMU."""
+    from chainmodel.fmu import simulate_fmu, reference_scene
+    result = simulate_fmu(fmu, reference_scene())
+    result.to_csv(path)
+    print(f"wrote {path} ({len(result.time)} samples)")
+    return path
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, default=DEFAULT_OUT, help="FMU file to write")
+    ap.add_argument("--reference", action="store_true",
+                    help="regenerate docs/fmu_reference.csv with the FMU just built")
+    ap.add_argument("--doc", action="store_true",
+                    help="rewrite the generated variable table in docs/fmu.md")
+    ap.add_argument("-q", "--quiet", action="store_true")
+    args = ap.parse_args(argv)
+    fmu = build(args.out, quiet=args.quiet)
+    if args.doc:
+        from chainmodel.fmu import update_doc_table
+        update_doc_table(fmu, DOC_MD)
+        print(f"updated the variable table in {DOC_MD}")
+    if args.reference:
+        write_reference(fmu)
+    if args.doc or args.reference:   # ship the new documentation / reference in the FMU too
+        build(args.out, quiet=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,487 @@
+"""ChainDrive FMU: a thin FMI 2.0 co-simulation adapter over the ``chainmodel`` library.
+
+No physics lives here. The adapter
+
+* generates its parameters from the library's parameter schema (``chainmodel.parameters``) and
+  its outputs from the model interface (``chainmodel.models.base.ALL_OUTPUTS``),
+* validates the parameters with ``chainmodel.parameters.validate`` when initialization ends,
+* builds the model of the chosen fidelity level and its stepper exactly as ``Scene.stepper``
+  does (``drive_from_parameters``, ``MODEL_CLASSES[level]``, ``make_stepper``),
+* advances the stepper over each communication step with the inputs held first-order,
+* and moves values between FMI variables and the library.
+
+Conventions (documented in docs/fmu.md):
+
+Hold
+    Over a step from t_k the inputs set at t_k are held first-order: the angle advances at the
+    held speed, speed and load torque stay constant (``Inputs.hold``).
+Acceleration
+    The models also take the input shaft's angular acceleration. The FMU estimates it by
+    backward difference of the speed input between communication points,
+    a_k = (w_k - w_{k-1}) / (t_k - t_{k-1}); 0 at the first point (no history). The same
+    estimate is used for the step from t_k and for outputs at t_k.
+Feedthrough
+    After fmi2DoStep the outputs at t_k+1 are those of the held inputs. If the master then sets
+    new inputs at t_k+1 and reads outputs, they are recomputed from the state at t_k+1 and the
+    new inputs (every output may depend directly on the inputs; ModelStructure says so).
+    A stateless level (0) has nothing to integrate: its outputs are computed when read, once,
+    from whichever inputs apply, so a master that sets inputs before reading pays one
+    evaluation per step, not two.
+Errors
+    pythonfmu 0.7 turns any Python exception into fmi2Fatal, so the adapter raises only where it
+    must (a bad parameter at fmi2ExitInitializationMode, a state that cannot be restored) and
+    logs a sentence naming the parameter first. A step that fails (divergence, non-finite
+    inputs, bad step size) returns fmi2Discard with a logged message; the FMU stays at the
+    last communication point with its last (finite) outputs and may be stepped again. Outputs
+    that cannot be computed when read (non-finite inputs set) keep their last finite values
+    and a warning is logged: never NaN.
+
+The adapter imports its own copy of ``chainmodel`` from ``resources/_vendor/chainmodel`` under a
+private module name, so another ``chainmodel`` in the host process never gets mixed in.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import importlib
+import importlib.util
+import json
+import math
+import sys
+from pathlib import Path
+
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Initial, Fmi2Status
+
+INPUTS = (
+    ("input_shaft.angle", "rad", "angle imposed on the input shaft; the driver follows it rigidly "
+     "at fidelity 0 and through the input-shaft spring at 1-3"),
+    ("input_shaft.speed", "rad/s", "time derivative of input_shaft.angle: advances the angle "
+     "within a step (first-order hold), damps the shaft, and its backward difference between "
+     "communication points is the acceleration estimate"),
+    ("load.torque", "N.m", "torque applied to the driven sprocket by the load, opposing forward "
+     "motion when positive"),
+)
+
+#: fmi2 default experiment: the seed 003 drive at the library's output interval
+DEFAULT_EXPERIMENT = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-4,
+                                       tolerance=1e-6)
+
+
+def _vendored_chainmodel(resources: str):
+    """Import ``resources/_vendor/chainmodel`` as a private package and return its modules.
+
+    The package is registered in ``sys.modules`` under a name derived from its path (needed for
+    its relative imports), never as ``chainmodel``: a host process may have its own chainmodel
+    imported or first on sys.path, and two FMUs unpacked in different places must not share
+    code either."""
+    root = Path(resources) / "_vendor" / "chainmodel"
+    init = root / "__init__.py"
+    if not init.is_file():
+        raise ImportError(f"this FMU's copy of the chainmodel package is missing ({root}); "
+                          "rebuild the FMU with build_fmu.py")
+    alias = "_chaindrive_fmu_" + hashlib.sha1(str(root.resolve()).encode()).hexdigest()[:16]
+    if alias not in sys.modules:
+        spec = importlib.util.spec_from_file_location(alias, init,
+                                                      submodule_search_locations=[str(root)])
+        package = importlib.util.module_from_spec(spec)
+        sys.modules[alias] = package
+        try:
+            spec.loader.exec_module(package)
+        except BaseException:
+            for name in [n for n in sys.modules if n == alias or n.startswith(alias + ".")]:
+                del sys.modules[name]
+            raise
+    mod = {name: importlib.import_module(f"{alias}.{name}")
+           for name in ("parameters", "models", "integrate", "scene")}
+    mod["package"] = sys.modules[alias]
+    return mod
+
+
+def _fmi_text(message: str) -> str:
+    """FMI log messages are printf format strings: escape '%'."""
+    return str(message).replace("%", "%%")
+
+
+def _why(exc: BaseException) -> str:
+    """The library's ValueError / SimulationDiverged messages are sentences for users; anything
+    else is a defect and keeps its type name."""
+    if isinstance(exc, ValueError) or type(exc).__name__ == "SimulationDiverged":
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _range_text(p) -> str:
+    if p.choices:
+        return "one of " + ", ".join(p.choices)
+    lo, hi = p.minimum, p.maximum
+    if lo is None and hi is None:
+        return ""
+    if hi is None:
+        return f"{'>' if p.exclusive_minimum else '>='} {lo:g}"
+    if lo is None:
+        return f"<= {hi:g}"
+    return f"{'(' if p.exclusive_minimum else '['}{lo:g}, {hi:g}]"
+
+
+def parameter_description(p) -> str:
+    """FMI description of a schema parameter: meaning, valid range, levels that use it."""
+    text = p.description
+    rng = _range_text(p)
+    if rng:
+        text += f"; valid: {rng}"
+    if tuple(p.levels) != (0, 1, 2, 3):
+        text += "; used at fidelity " + ", ".join(str(k) for k in p.levels)
+    if p.structural:
+        text += "; fixed after initialization"
+    return text
+
+
+class ChainDrive(Fmi2Slave):
+    """Roller chain drive, FMI 2.0 co-simulation (see the module docstring)."""
+
+    author = "ChainDrive"
+    description = ("Roller chain drive (two sprockets, a roller chain): input-shaft motion and "
+                   "load torque in; sprocket motion, span tensions, shaft torque out. Fidelity "
+                   "ladder 0 kinematic, 1 torsional, 2 modal, 3 multibody (parameter fidelity).")
+    license = "MIT"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        if not self.resources:
+            raise ImportError("the ChainDrive FMU needs its resources folder")
+        lib = _vendored_chainmodel(self.resources)
+        self._P, self._M, self._I, self._S = (lib["parameters"], lib["models"],
+                                              lib["integrate"], lib["scene"])
+        self.version = getattr(lib["package"], "__version__", None)
+        self.default_experiment = DEFAULT_EXPERIMENT
+
+        # one value table per FMI type, keyed by value reference
+        self._real: dict[int, float] = {}
+        self._int: dict[int, int] = {}
+        self._bool: dict[int, bool] = {}
+        self._str: dict[int, str] = {}
+        self._input_vrs: list[int] = []
+        self._output_map: list[tuple[int, str]] = []   # (vr, output name)
+        self._params: list[tuple[int, object, dict]] = []  # (vr, Parameter, its value table)
+        self._param_by_vr: dict[int, object] = {}
+        self._table_of: dict[int, dict] = {}
+
+        for name, unit, desc in INPUTS:
+            vr = self._add(Real, name, 0.0, self._real, causality=Fmi2Causality.input,
+                           variability=Fmi2Variability.continuous, description=f"{desc} [{unit}]")
+            self._input_vrs.append(vr)
+        for spec in self._M.ALL_OUTPUTS:
+            vr = self._add(Real, spec.name, 0.0, self._real, causality=Fmi2Causality.output,
+                           variability=Fmi2Variability.continuous,
+                           initial=Fmi2Initial.calculated,
+                           description=f"{spec.description} [{spec.unit or '1'}]")
+            self._output_map.append((vr, spec.name))
+        kinds = {float: (Real, self._real), int: (Integer, self._int),
+                 bool: (Boolean, self._bool), str: (String, self._str)}
+        for p in self._P.PARAMETERS:
+            cls, table = kinds[p.kind]
+            variability = Fmi2Variability.fixed if p.structural else Fmi2Variability.tunable
+            vr = self._add(cls, p.name, p.kind(p.default), table,
+                           causality=Fmi2Causality.parameter, variability=variability,
+                           initial=Fmi2Initial.exact, description=parameter_description(p))
+            self._params.append((vr, p, table))
+            self._param_by_vr[vr] = p
+        self._output_names = [name for _, name in self._output_map]
+        self._output_vrs = frozenset(vr for vr, _ in self._output_map)
+        self._in_angle, self._in_speed, self._in_torque = self._input_vrs
+
+        # simulation state
+        self._t0 = 0.0
+        self._initialized = False
+        self._stepper = None
+        self._model_params: dict | None = None  # validated parameters the model was built with
+        self._params_changed = True
+        self._stale = False          # outputs must be recomputed before they are read
+        self._held = False           # ... from the held inputs (True) or the inputs set (False)
+        self._prev_t = None          # previous communication point and the speed set there
+        self._prev_speed = 0.0
+        self._warned_outputs = False
+
+    # --- variable plumbing --------------------------------------------------------------------
+    def _add(self, cls, name, value, table, **kw):
+        vr = len(self.vars)
+        table[vr] = value
+        self._table_of[vr] = table
+        var = cls(name, getter=lambda: table[vr], setter=lambda v: self._set_one(vr, v), **kw)
+        self.register_variable(var, nested=False)
+        assert var.value_reference == vr
+        return vr
+
+    def _set_one(self, vr, value):
+        table = self._table_of[vr]
+        if vr in self._param_by_vr:
+            p = self._param_by_vr[vr]
+            if self._initialized and p.structural:
+                self.log(_fmi_text(f"parameter {p.name} is fixed after initialization; the new "
+                                   f"value {value!r} is ignored"), Fmi2Status.warning)
+                return
+            table[vr] = value
+            self._params_changed = True
+        elif vr in self._input_vrs:
+            table[vr] = value
+            self._stale, self._held = True, False
+        else:
+            self.log(_fmi_text(f"{self.vars[vr].name} is an output and cannot be set; ignored"),
+                     Fmi2Status.warning)
+
+    def _getter(self, table, kind, vrs):
+        if self._stale or (self._params_changed and not self._initialized):
+            outputs = self._output_vrs
+            if any(vr in outputs for vr in vrs):
+                self._refresh_outputs()
+        try:
+            return [table[vr] for vr in vrs]
+        except KeyError:
+            bad = [vr for vr in vrs if vr not in table]
+            self._fail(f"value reference(s) {bad} are not of type {kind}")
+
+    def get_real(self, vrs):
+        return self._getter(self._real, "Real", vrs)
+
+    def get_integer(self, vrs):
+        return self._getter(self._int, "Integer", vrs)
+
+    def get_boolean(self, vrs):
+        return self._getter(self._bool, "Boolean", vrs)
+
+    def get_string(self, vrs):
+        return self._getter(self._str, "String", vrs)
+
+    def _setter(self, table, kind, vrs, values):
+        for vr, value in zip(vrs, values):
+            if vr not in table:
+                self._fail(f"value reference {vr} is not of type {kind}")
+            self._set_one(vr, value)
+
+    def set_real(self, vrs, values):
+        # hot path: the three inputs, every step
+        real, inputs = self._real, self._input_vrs
+        for vr, value in zip(vrs, values):
+            if vr in inputs:
+                real[vr] = value
+                self._stale, self._held = True, False
+            elif vr in real:
+                self._set_one(vr, value)
+            else:
+                self._fail(f"value reference {vr} is not of type Real")
+
+    def set_integer(self, vrs, values):
+        self._setter(self._int, "Integer", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._setter(self._bool, "Boolean", vrs, [bool(v) for v in values])
+
+    def set_string(self, vrs, values):
+        self._setter(self._str, "String", vrs, values)
+
+    def _fail(self, message: str):
+        """Log ``message`` as an error and raise (pythonfmu reports fmi2Fatal).
+
+        pythonfmu 0.7 releases its references to this instance, its class and its log queue
+        once when the exception is handled and once more in fmi2FreeInstance; one extra
+        reference each keeps the interpreter consistent (otherwise the host crashes later)."""
+        self.log(_fmi_text(message), Fmi2Status.error)
+        try:
+            for obj in (self, type(self), self.log_queue):
+                ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
+        except Exception:  # pragma: no cover - non-CPython host
+            pass
+        raise ValueError(message)
+
+    # --- model ----------------------------------------------------------------------------------
+    def _parameter_values(self) -> dict:
+        return {p.name: table[vr] for vr, p, table in self._params}
+
+    def _inputs_at(self, t: float):
+        """Inputs at communication point t, with the backward-difference acceleration."""
+        real = self._real
+        speed = real[self._in_speed]
+        if self._prev_t is not None and t > self._prev_t:
+            acc = (speed - self._prev_speed) / (t - self._prev_t)
+        else:
+            acc = 0.0
+        return self._M.Inputs(real[self._in_angle], speed, real[self._in_torque], acc)
+
+    def _build(self, t: float, state=None):
+        """Validate the parameters and build model and stepper at time t (raises ValueError)."""
+        P = self._P
+        params = P.validate(self._parameter_values())
+        level = params["fidelity"]
+        classes = self._M.MODEL_CLASSES
+        if level not in classes:
+            raise ValueError(
+                f"parameter fidelity = {level} ({P.FIDELITY_NAMES[level]}) is not available in "
+                "this build of the FMU; available: "
+                + ", ".join(f"{k} ({P.FIDELITY_NAMES[k]})" for k in sorted(classes)))
+        drive = self._S.drive_from_parameters(params, "ChainDrive")
+        model = classes[level](drive, params)
+        u = self._inputs_at(t)
+        x0 = None if state is None else state.x
+        stepper = self._I.make_stepper(model, params["solver.method"], t, u,
+                                       step=params["solver.step"], rtol=params["solver.rtol"],
+                                       x0=x0)
+        if state is not None:
+            stepper.set_state(state)
+        self._stepper, self._model_params = stepper, params
+        self._params_changed = False
+        return stepper
+
+    def _store_outputs(self, out: dict):
+        real = self._real
+        for vr, name in self._output_map:
+            real[vr] = out[name]
+
+    def _refresh_outputs(self):
+        """Outputs for the current state and the inputs set since (direct feedthrough)."""
+        try:
+            if self._stepper is None or (self._params_changed and not self._initialized):
+                self._build(self._t0)
+            st = self._stepper
+            u = st.inputs if self._held else self._inputs_at(st.t)
+            u.check()
+            out = st.model.outputs(st.t, st.x, u)
+            bad = [n for n in self._output_names if not math.isfinite(out[n])]
+            if bad:
+                raise self._M.SimulationDiverged(f"non-finite outputs {', '.join(bad[:5])}")
+        except Exception as exc:  # never raise from a getter: pythonfmu would report fatal
+            if not self._warned_outputs:
+                self.log(_fmi_text(f"outputs keep their last values: {_why(exc)}"),
+                         Fmi2Status.warning)
+                self._warned_outputs = True
+            return
+        self._store_outputs(out)
+        self._stale = False
+        self._warned_outputs = False
+
+    # --- FMI ------------------------------------------------------------------------------------
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._t0 = float(start_time)
+
+    def exit_initialization_mode(self):
+        try:
+            st = self._build(self._t0)
+            st.inputs.check()
+            out = st.outputs()
+        except Exception as exc:
+            self._fail(f"initialization failed: {_why(exc)}")
+        self._store_outputs(out)
+        self._stale = self._held = False
+        self._initialized = True
+        level = self._model_params["fidelity"]
+        qs = [n for n, d in st.model.output_descriptions().items()
+              if d.startswith(self._M.base.QUASI_STATIC)]
+        self.log(_fmi_text(f"fidelity {level} ({self._P.FIDELITY_NAMES[level]}), stepper "
+                           f"{type(st).__name__} {getattr(st, 'method', '')}; quasi-static "
+                           f"estimates at this level: {', '.join(qs) or 'none'}"),
+                 Fmi2Status.ok, "logAll")
+
+    def do_step(self, current_time, step_size):
+        st = self._stepper
+        if not self._initialized or st is None:
+            self.log("fmi2DoStep called before initialization", Fmi2Status.error)
+            return False
+        if not (step_size > 0 and math.isfinite(step_size)):
+            self.log(_fmi_text(f"communication step size must be positive and finite, got "
+                               f"{step_size!r}; step discarded"), Fmi2Status.discard)
+            return False
+        if abs(current_time - st.t) > 1e-9 * max(1.0, abs(st.t)):
+            self.log(_fmi_text(f"fmi2DoStep from t = {current_time!r} s but the FMU is at "
+                               f"t = {st.t!r} s; step discarded"), Fmi2Status.discard)
+            return False
+        if self._params_changed:   # a tunable parameter changed: rebuild, keep the state
+            try:
+                st = self._build(st.t, st.get_state())
+            except Exception as exc:
+                self.log(_fmi_text(f"parameter change refused: {_why(exc)}"), Fmi2Status.discard)
+                return False
+        u = self._inputs_at(current_time)
+        if not st.model.n_states:
+            # stateless level (0): nothing to integrate; the outputs at t + h are computed when
+            # read, from the held inputs or from the inputs the master sets at t + h
+            try:
+                u.check()
+            except ValueError as exc:
+                self.log(_fmi_text(f"step from t = {current_time:.9g} s discarded: {_why(exc)}"),
+                         Fmi2Status.discard)
+                return False
+            st.t, st.inputs = current_time + step_size, u.hold(step_size)
+            self._prev_t, self._prev_speed = current_time, u.speed
+            self._stale, self._held = True, True
+            return True
+        saved = st.get_state()
+        try:
+            out = st.advance(current_time + step_size, u)
+            self._store_outputs(out)
+        except Exception as exc:   # diverged, bad input, or a model error: discard the step
+            st.set_state(saved)
+            self.log(_fmi_text(f"step from t = {current_time:.9g} s over {step_size:.6g} s "
+                               f"discarded, the FMU stays at t = {current_time:.9g} s: "
+                               f"{_why(exc)}"),
+                     Fmi2Status.discard)
+            return False
+        self._prev_t, self._prev_speed = current_time, u.speed
+        self._stale, self._held = False, False
+        return True
+
+    def terminate(self):
+        pass
+
+    # --- FMU state ------------------------------------------------------------------------------
+    def _get_fmu_state(self):
+        st = self._stepper
+        s = None
+        if st is not None:
+            ss = st.get_state()
+            u = ss.inputs
+            s = {"t": ss.t, "x": [float(v) for v in ss.x], "h": ss.h,
+                 "inputs": [u.angle, u.speed, u.torque, u.acceleration], "extra": dict(ss.extra)}
+        return {"format": "ChainDrive-1",
+                "real": list(self._real.items()), "int": list(self._int.items()),
+                "bool": list(self._bool.items()), "str": list(self._str.items()),
+                "t0": self._t0, "initialized": self._initialized, "stale": self._stale,
+                "held": self._held,
+                "prev_t": self._prev_t, "prev_speed": self._prev_speed, "stepper": s}
+
+    def _set_fmu_state(self, state):
+        if not isinstance(state, dict) or state.get("format") != "ChainDrive-1":
+            self._fail("fmi2SetFMUstate: not a ChainDrive FMU state")
+        for key, table in (("real", self._real), ("int", self._int), ("bool", self._bool),
+                           ("str", self._str)):
+            for vr, value in state[key]:
+                table[int(vr)] = value
+        self._t0 = state["t0"]
+        self._prev_t, self._prev_speed = state["prev_t"], state["prev_speed"]
+        self._initialized = state["initialized"]
+        s = state["stepper"]
+        if s is None:
+            self._stepper, self._model_params, self._params_changed = None, None, True
+        else:
+            import numpy as np
+            saved = self._I.StepperState(s["t"], np.array(s["x"], float), s["h"],
+                                         self._M.Inputs(*s["inputs"]), dict(s["extra"]))
+            try:
+                if (self._stepper is None or self._params_changed
+                        or self._P.validate(self._parameter_values()) != self._model_params):
+                    self._build(saved.t, saved)
+                else:
+                    self._stepper.set_state(saved)
+            except Exception as exc:
+                self._fail(f"fmi2SetFMUstate: cannot restore this state: {_why(exc)}")
+        self._stale, self._held = state["stale"], state["held"]
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        # json writes floats with repr(): exact round trip (non-finite values as NaN/Infinity)
+        return json.dumps(state, separators=(",", ":")).encode("utf-8")
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes):
+        return json.loads(data.decode("utf-8"))
