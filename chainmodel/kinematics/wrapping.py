@@ -100,7 +100,7 @@ class ChainGeometry:
 
 
 def _span(c_from, radius_from, alpha_from, phase_from, c_to, radius_to, alpha_to, phase_to,
-          direction0):
+          direction0, edge=_EDGE):
     """Endpoints of a straight span between two sprockets (vectorised over the phases).
 
     Seats on the 'from' sprocket lie at phase_from + 2 alpha_from j, likewise 'to'. Iterates
@@ -112,8 +112,8 @@ def _span(c_from, radius_from, alpha_from, phase_from, c_to, radius_to, alpha_to
     direction = np.full(phase_from.shape, float(direction0))
     j_from = j_to = None
     for _ in range(8):
-        jf = np.floor((direction + math.pi / 2 + alpha_from - phase_from) / (2 * alpha_from) + _EDGE)
-        jt = np.floor((direction + math.pi / 2 + alpha_to - phase_to) / (2 * alpha_to) + _EDGE)
+        jf = np.floor((direction + math.pi / 2 + alpha_from - phase_from) / (2 * alpha_from) + edge)
+        jt = np.floor((direction + math.pi / 2 + alpha_to - phase_to) / (2 * alpha_to) + edge)
         ang_f = phase_from + 2 * alpha_from * jf
         ang_t = phase_to + 2 * alpha_to * jt
         a = c_from + radius_from * np.exp(1j * ang_f)
@@ -124,9 +124,21 @@ def _span(c_from, radius_from, alpha_from, phase_from, c_to, radius_to, alpha_to
         if j_from is not None and np.array_equal(jf, j_from) and np.array_equal(jt, j_to):
             direction = new_dir
             break
+        moving = None if j_from is None else (jf != j_from) | (jt != j_to)
         j_from, j_to, direction = jf, jt, new_dir
-    else:  # pragma: no cover - guarded by tests over extreme drives
-        raise RuntimeError("span endpoint search did not settle")
+    else:
+        # Within about edge (in seat units) *before* an event the tolerant window flips between
+        # the two candidate endpoints (each one's span direction selects the other); the strict
+        # window settles those samples, while exactly at an event the tolerant one settles.
+        if edge == 0.0 or moving is None:  # pragma: no cover
+            raise RuntimeError("span endpoint search did not settle")
+        sub = _span(c_from, radius_from, alpha_from, phase_from[moving], c_to, radius_to,
+                    alpha_to, phase_to[moving], direction0, edge=0.0)
+        jf, jt, ang_f, ang_t, a, b, direction = (np.array(v) for v in (jf, jt, ang_f, ang_t, a,
+                                                                        b, direction))
+        jf[moving], jt[moving] = sub.seat_start, sub.seat_end
+        ang_f[moving], ang_t[moving] = sub.angle_start, sub.angle_end
+        a[moving], b[moving], direction[moving] = sub.start, sub.end, sub.direction
     vec = b - a
     length = np.abs(vec)
     arm_f = radius_from * np.sin(ang_f - direction)
