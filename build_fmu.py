@@ -258,6 +258,8 @@ def markdown_to_html(text: str, title: str) -> str:
             table = []
 
     for line in text.splitlines():
+        if line.startswith("<!--"):
+            continue
         if line.startswith("```"):
             flush()
             out.append("</pre>" if in_code else "<pre>")
