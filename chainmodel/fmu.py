@@ -105,7 +105,8 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
     acceleration estimated by backward difference of the speed (0 at t = 0) instead of the
     profile's exact acceleration (see docs/fmu.md).
 
-    ``log``: called with each message the FMU logs (e.g. ``print``). Errors raise ValueError
+    ``log``: called with each message the FMU logs (e.g. ``print``). ``progress``: one
+    updating line on stderr, as ``run_scene`` shows it. Errors raise ValueError
     (initialization refused: the message names the parameter), or
     :class:`~chainmodel.models.base.SimulationDiverged` (a step was discarded), or
     :class:`FMUError`.
@@ -118,8 +119,9 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
     from fmpy.fmi2 import FMU2Slave
 
     from .models import SimulationDiverged
+    from .parameters import FIDELITY_NAMES
     from .scene import load_scene
-    from .simulation import Result
+    from .simulation import Result, _Progress
 
     sc = load_scene(scene)
     fmu_path = Path(fmu_path)
@@ -144,6 +146,8 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
     times = sc.times()
     data = np.empty((len(times), len(outputs)))
     logger = _Log(log)
+    bar = _Progress(progress, float(times[-1]),
+                    f"{sc.name} ({FIDELITY_NAMES[sc.fidelity]}, via FMU)")
 
     unzipdir = _extracted(fmu_path)
     fmu = None
@@ -181,6 +185,8 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
                                          f"{logger.problems(mark)}") from None
             inputs(times[i])
             data[i] = fmu.getReal(out_vr)
+            bar.update(float(times[i]))
+        bar.close()
         fmu.terminate()
     except FMICallException as exc:
         raise FMUError(f"{exc}: {logger.problems()}") from None

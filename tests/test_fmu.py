@@ -520,3 +520,11 @@ def test_fmu_uses_its_vendored_chainmodel_and_needs_only_numpy_scipy(chaindrive_
     assert res["out"]["driver.angle"] == pytest.approx(0.3 + 10.0 * 1e-3, rel=1e-14)
     assert res["out"]["driver.speed"] == 10.0
     assert res["out"]["driven.speed"] > 0
+
+
+@pytest.mark.skipif(all(k in MODEL_CLASSES for k in range(4)), reason="every level is built")
+def test_simulate_fmu_reports_a_missing_level_as_value_error(chaindrive_fmu):
+    level = next(k for k in range(4) if k not in MODEL_CLASSES)
+    scene = Scene.from_preset("xu2010", fidelity=level, duration=0.01, output_interval=1e-3)
+    with pytest.raises(ValueError, match=f"fidelity = {level}"):
+        simulate_fmu(chaindrive_fmu, scene)
