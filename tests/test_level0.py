@@ -1,0 +1,233 @@
+"""Level 0, the kinematic model (models/kinematic.py): exact driven motion and quasi-static
+(kinetostatic) span tensions and input torque.
+
+What must hold (derived in docs/kinematics.md, "Level 0 forces"): with the driver rigid on the
+input shaft (speed w1, acceleration a1), the driven motion (w2, a2) from the four-bar, span
+tensions T_u, T_l acting through the moment arms of the span lines, the two torque balances
+
+    driver:  tau_in = I1 a1 + T_u a_uC - T_l a_lC
+    driven:  T_u a_uO - T_l a_lO = I2 a2 + d2 w2 + M_load
+
+multiplied by w1 and w2 and subtracted give the power balance
+
+    tau_in w1 = M_load w2 + d/dt (I1 w1^2 / 2 + I2 w2^2 / 2) + d2 w2^2
+                + T_u dl_u/dt + T_l dl_l/dt,
+
+because a span's length changes at dl/dt = w_end a_end - w_start a_start. The tight span is
+rigid (dl/dt = 0, the four-bar), so only the slack span's stretching power remains. The test
+checks it with finite differences of the kinetic energy and of the span lengths, none of which
+the model uses.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import chainmodel
+from chainmodel import kinematics as K
+from chainmodel.geometry import Drive
+from chainmodel.models import Inputs
+from chainmodel.models.kinematic import KinematicModel, static_span_tension
+from chainmodel.parameters import defaults
+from chainmodel.presets import reference_table
+
+INCH = 0.0254
+
+
+def _model(drive, **over):
+    p = defaults()
+    p.update(over)
+    return KinematicModel(drive, p)
+
+
+# --- motion -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["C1", "xu2010", "coarse", "A1"])
+def test_driven_motion_is_driven_rotation(name):
+    d = chainmodel.preset(name)
+    m = _model(d)
+    rng = np.random.default_rng(5)
+    angle = rng.uniform(-4, 4, 300)
+    speed = rng.uniform(-20, 20, 300)
+    accel = rng.uniform(-100, 100, 300)
+    out = m.evaluate(angle, speed, accel, 10.0)
+    for rev in (False, True):
+        sel = (speed < 0) == rev
+        r = K.driven_rotation(d, angle[sel], speed[sel], accel[sel], reverse=rev)
+        np.testing.assert_allclose(out["driven.angle"][sel], r.driven_angle, rtol=1e-14, atol=0)
+        np.testing.assert_allclose(out["driven.speed"][sel], r.driven_speed, rtol=1e-14)
+        np.testing.assert_allclose(out["driven.acceleration"][sel], r.driven_acceleration,
+                                   rtol=1e-14)
+        np.testing.assert_allclose(out["velocity_ratio"][sel], r.velocity_ratio, rtol=1e-14)
+        np.testing.assert_allclose(out["tight_span.length"][sel], r.span_length, rtol=1e-14)
+    np.testing.assert_array_equal(out["driver.angle"], angle)
+    np.testing.assert_array_equal(out["driver.speed"], speed)
+    np.testing.assert_allclose(out["transmission_error"],
+                               out["driven.angle"] - d.tooth_ratio * angle, rtol=1e-14)
+
+
+def test_negative_speed_runs_the_reverse_branch():
+    """Level 0 uses the mirror-symmetric reverse kinematics when the input runs backwards: the
+    driven speed follows the reversed (lower-span) four-bar, not the forward one."""
+    d = chainmodel.preset("C1")
+    m = _model(d)
+    angle = np.linspace(0.01, 1.0, 50)
+    out = m.evaluate(angle, -10.0, 0.0, 0.0)
+    rev = K.driven_rotation(d, angle, -10.0, reverse=True)
+    fwd = K.driven_rotation(d, angle, -10.0, reverse=False)
+    np.testing.assert_allclose(out["velocity_ratio"], rev.velocity_ratio, rtol=1e-14)
+    assert np.max(np.abs(rev.velocity_ratio - fwd.velocity_ratio)) > 1e-3
+    assert np.all(out["driven.speed"] < 0)
+    # the step interface (outputs) takes the same branch
+    o = m.outputs(0.0, np.empty(0), Inputs(angle=0.5, speed=-10.0))
+    assert o["velocity_ratio"] == pytest.approx(
+        float(K.driven_rotation(d, 0.5, -10.0, reverse=True).velocity_ratio), rel=1e-14)
+
+
+# --- power balance ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["C1", "xu2010", "A1", "coarse"])
+@pytest.mark.parametrize("w, a, load", [(12.0, 0.0, 40.0), (12.0, 80.0, 40.0),
+                                        (8.0, -30.0, -15.0), (-10.0, 25.0, 30.0),
+                                        (-6.0, -40.0, -20.0)])
+def test_power_balance(name, w, a, load):
+    d = chainmodel.preset(name)
+    if d.links is None:
+        d = d.with_links(math.ceil(K.wrap_length_range(d)[2] / d.pitch))
+    m = _model(d, **{"driven.damping": 0.4, "chain.pretension": 300.0})
+    p = m.params
+    I1, I2, d2 = p["driver.inertia"], p["driven.inertia"], p["driven.damping"]
+    P_c = 2 * math.pi / d.n_driver
+    t_end = 3 * P_c / abs(w)
+    if a * w < 0:               # decelerating: stop before the speed changes sign
+        t_end = min(t_end, 0.5 * abs(w / a))
+    t = np.linspace(0, t_end, 301) + 1e-4
+    dt = 1e-6 * P_c / abs(w)
+
+    def state(t):
+        angle = 0.3 + w * t + 0.5 * a * t**2
+        out = m.evaluate(angle, w + a * t, a, load)
+        g = K.chain_geometry(d, angle, out["driven.angle"])
+        return out, g
+
+    (o, g0), (op, gp), (om, gm) = state(t), state(t + dt), state(t - dt)
+    same = np.ones(t.shape, bool)
+    for span in ("upper", "lower"):
+        for field in ("seat_start", "seat_end"):
+            for gg in (gp, gm):
+                same &= getattr(getattr(gg, span), field) == getattr(getattr(g0, span), field)
+    assert same.mean() > 0.9
+    ke = lambda o: 0.5 * I1 * o["driver.speed"] ** 2 + 0.5 * I2 * o["driven.speed"] ** 2
+    d_ke = (ke(op) - ke(om)) / (2 * dt)
+    dl_u = (gp.upper.length - gm.upper.length) / (2 * dt)
+    dl_l = (gp.lower.length - gm.lower.length) / (2 * dt)
+    reverse = w < 0
+    T_u, T_l = ((o["slack_span.tension"], o["tight_span.tension"]) if reverse
+                else (o["tight_span.tension"], o["slack_span.tension"]))
+    w1, w2 = o["driver.speed"], o["driven.speed"]
+    lhs = o["input_shaft.torque"] * w1
+    rhs = load * w2 + d_ke + d2 * w2**2 + T_u * dl_u + T_l * dl_l
+    scale = np.max(np.abs(load * w2)) + np.max(np.abs(d_ke)) + np.max(np.abs(T_l * dl_l))
+    assert np.max(np.abs(lhs - rhs)[same]) < 1e-6 * scale
+    # the tight span is rigid between events: no power goes into it
+    dl_tight = dl_l if reverse else dl_u
+    assert np.max(np.abs(dl_tight[same])) < 1e-6 * d.pitch * abs(w)
+
+
+# --- tension closure --------------------------------------------------------------------------
+
+def test_symmetric_drive_unloaded_tensions_equal_static_tension():
+    """n_c = n_o, f = 0: the chain of M = 46 links fits exactly (L = 2 x_c + 12 p = 46 p, seed
+    004 Table 1 row B2 with f -> 0) and the two spans are mirror images with equal moment arms.
+    With no load, no inertia and no damping both spans carry the static tension, which is the
+    pretension alone."""
+    d = Drive(12, 12, INCH, 16, 0.0, links=46)
+    m = _model(d, **{"driver.inertia": 0.0, "driven.inertia": 0.0, "driven.damping": 0.0,
+                     "chain.pretension": 800.0})
+    assert m.static_tension() == pytest.approx(800.0, rel=1e-9)
+    angle = np.linspace(-1, 1, 101)
+    for speed, accel in ((10.0, 0.0), (10.0, 50.0), (-10.0, -50.0)):
+        out = m.evaluate(angle, speed, accel, 0.0)
+        np.testing.assert_allclose(out["tight_span.tension"], 800.0, rtol=1e-9)
+        np.testing.assert_allclose(out["slack_span.tension"], 800.0, rtol=1e-9)
+        np.testing.assert_allclose(out["input_shaft.torque"], 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["C1", "xu2010", "A1"])
+def test_unloaded_tensions_share_the_static_sum(name):
+    """No load, no inertia: the driven sprocket is free, so T_u a_uO = T_l a_lO, and the
+    closure (seed 004 eqs 15-16 generalised) keeps T_u + T_l = 2 T0."""
+    d = chainmodel.preset(name)
+    m = _model(d, **{"driver.inertia": 0.0, "driven.inertia": 0.0, "driven.damping": 0.0})
+    angle = np.linspace(0, 2 * math.pi / d.n_driver, 200)
+    out = m.evaluate(angle, 10.0, 0.0, 0.0)
+    g = K.chain_geometry(d, angle, out["driven.angle"])
+    T_u, T_l = out["tight_span.tension"], out["slack_span.tension"]
+    np.testing.assert_allclose(T_u + T_l, 2 * m.static_tension(), rtol=1e-12)
+    np.testing.assert_allclose(T_u * g.upper.arm_start, T_l * g.lower.arm_end, rtol=1e-12)
+
+
+@pytest.mark.parametrize("load", [-1e5, -300.0, -1.0, 0.0, 1.0, 300.0, 1e5])
+@pytest.mark.parametrize("speed", [10.0, -10.0])
+def test_spans_never_push(load, speed):
+    """Tensions are never negative, whatever the load torque's sign; when one span would have
+    to push it goes slack (zero) and the other takes the whole torque, and the driven
+    sprocket's torque balance still holds."""
+    d = chainmodel.preset("C1")
+    m = _model(d, **{"driven.damping": 0.2})
+    p = m.params
+    angle = np.linspace(0, 2 * math.pi / d.n_driver, 120)
+    out = m.evaluate(angle, speed, 30.0, load)
+    T_t, T_s = out["tight_span.tension"], out["slack_span.tension"]
+    assert np.all(T_t >= 0) and np.all(T_s >= 0)
+    T_u, T_l = (T_s, T_t) if speed < 0 else (T_t, T_s)
+    g = K.chain_geometry(d, angle, out["driven.angle"])
+    torque = (p["driven.inertia"] * out["driven.acceleration"]
+              + p["driven.damping"] * out["driven.speed"] + load)
+    np.testing.assert_allclose(T_u * g.upper.arm_start - T_l * g.lower.arm_end, torque,
+                               rtol=1e-10, atol=1e-9)
+    if abs(load) >= 300:     # beyond what 2 T0 can split: one span slack
+        assert np.all((T_u == 0) | (T_l == 0))
+        assert np.all((T_u == 0) == (load < 0))
+
+
+# --- static tension ---------------------------------------------------------------------------
+
+def test_static_tension_without_links_is_the_pretension():
+    d = chainmodel.preset("medium", links=None)
+    p = defaults()
+    p["chain.pretension"] = 123.0
+    assert static_span_tension(d, p) == 123.0
+
+
+def test_static_tension_from_span_stretch():
+    """Rigid seats, elastic span links: the excess wrapping length L - M p (seed 004 section
+    2) stretches the n_u + n_l span links. For n_c = n_o = 12, N = 16, f = 0.001 and M = 46,
+    L = 46 p + 2 f p (the B2 row of Table 1: 46.0048 at f = 0.0024) spread over 17 + 17
+    links, so T0 = pretension + k 2 f p / 34."""
+    d = Drive(12, 12, INCH, 16, 0.001, links=46)
+    p = defaults()
+    p["chain.pretension"] = 100.0
+    k = p["chain.link_stiffness"]
+    assert static_span_tension(d, p) == pytest.approx(100.0 + k * 2 * 0.001 * INCH / 34,
+                                                      rel=1e-6)
+
+
+def test_static_tension_c1_within_table1_bounds():
+    """C1 with M = 40 (seed 004 Table 1): the stretch lies between L_min - M p = 0.0040 p and
+    L_max - M p = 0.0149 p, spread over the span links."""
+    row = next(r for r in reference_table("wrap_length_jsv2016_table1.csv") if r["id"] == "C1")
+    d = chainmodel.preset("C1")
+    p = defaults()
+    k = p["chain.link_stiffness"]
+    phi = np.linspace(0, 2 * math.pi / d.n_driver, 100, endpoint=False)
+    g = K.chain_geometry(d, phi, K.driven_rotation(d, phi).driven_angle)
+    n = g.upper_links + g.lower_links
+    lo = k * (float(row["L_min_over_p"]) - 40) * INCH / n.max()
+    hi = k * (float(row["L_max_over_p"]) - 40) * INCH / n.min()
+    T0 = static_span_tension(d, p)
+    assert lo < T0 < hi
+    # and close to the mean stretch over the mean span-link count
+    mean = k * (float(row["L_mean_over_p"]) - 40) * INCH / n.mean()
+    assert T0 == pytest.approx(mean, rel=0.05)
