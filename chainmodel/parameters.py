@@ -144,6 +144,11 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("contact.damping", 74.0, "N.s/m",
        "roller-tooth contact damping (not in seed 003; about 10 % of critical for one link "
        "mass on the contact spring)", minimum=0.0, levels=(3,)),
+    _p("contact.seating_angle", 2 * math.pi / 3, "rad",
+       "ISO 606 roller seating angle constant A: the seat circle spans A - 90 deg / z and "
+       "straight flanks continue it (not in seed 003; 120 deg is ISO's minimum, the most open "
+       "flanks); A >= 180 deg gives the paper's bare circular seat of eq (9)",
+       minimum=math.pi / 3, maximum=math.pi, display_unit="deg", levels=(3,)),
     # sprockets
     _p("driver.inertia", 4.0108e-3, "kg.m2", "driver sprocket moment of inertia I1 (seed 003)",
        minimum=0.0, exclusive_minimum=True),
@@ -187,6 +192,10 @@ PARAMETERS: tuple[Parameter, ...] = (
        "add the appendix's centrifugal and tangential inertia forces Q on seated rollers "
        "(seed 003 appendix eqs 4-7); off is the consistent choice for inertial coordinates",
        kind=bool, levels=(3,)),
+    _p("multibody.paper_damping", False, "",
+       "use the appendix's isotropic dissipation function S (seed 003 eq A3: damps the rigid "
+       "rotation of links and sliding in seats); off uses axial link and normal contact "
+       "dampers", kind=bool, levels=(3,)),
     # solver
     _p("solver.method", "auto", "", "time stepper (see chainmodel.integrate)", kind=str,
        choices=("auto", "rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda"),

@@ -1,0 +1,483 @@
+"""Level 3: the multibody model of seed 003 (Xu et al. 2010) — every roller of the closed chain a
+point mass, both sprockets rigid bodies, link spring-dampers, roller-seat contact with clearance,
+gravity, a torsionally flexible input shaft and the load torque.
+
+Equations of motion (derived in docs/multibody.md from the appendix's T, U, S by Lagrange's
+equation, seed 003 eq 11; eq 12 of the text copy is garbled and not used). Coordinates are
+inertial: roller positions z_i = (x_i, y_i) in the lead's XY frame (driven sprocket O at the
+origin, driver C at (x_c, y_c)), sprocket rotations phi1, phi2 forward positive (clockwise in XY):
+
+    m z_i''  = F_link(i) - F_link(i-1) + sum_s F_contact(i, s) + m g               (eqs 12-13)
+    I1 phi1'' = k_r (tau - phi1) + c_r (tau' - phi1') + sum_i Q_contact(i, 1)      (eq 14)
+    I2 phi2'' = sum_i Q_contact(i, 2) - M_load - d2 phi2'                          (eq 15)
+
+* Link i joins roller i and i+1 (mod M): axial force T = k (|d| - l0) + c e.(v_{i+1} - v_i)
+  along e = d/|d| (U of eq A2; the dissipation is axial, see below). l0 = p - pretension / k.
+* Contact (eqs 5-10): each roller is checked against the seat of each sprocket nearest to it by
+  angle about that sprocket's centre, from the sprocket's current rotation (so the assignment
+  holds for ever, whatever M and z). The seat is the paper's circle of radius R_t about the seat
+  centre (clearance R_t - R_r) over the ISO 606 seating angle, continued by straight flanks
+  tangent to it (the paper's circle alone, eq 9, is kept as ``contact.seating_angle >= pi``).
+  Penetration delta gives the normal force F_n = max(0, k_c delta + c_c delta') on the roller
+  (towards the seat), and its reaction on the sprocket.
+* Gravity points along -Y rotated by (theta1 - drive.inclination).
+* ``multibody.rotating_frame_forces`` adds the appendix's Q (eqs A4-A7) on seated rollers;
+  off by default because the coordinates are inertial and m z'' already contains those inertia
+  forces (derivation in docs/multibody.md).
+* ``multibody.paper_damping`` switches to the appendix's isotropic dissipation function S
+  (damps rigid rotation of links and tangential sliding in seats; kept for comparison).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+from typing import Any, Mapping
+
+import numpy as np
+
+from .. import parameters as PRM
+from ..geometry import Drive
+from ..kinematics import driven_rotation
+from ..kinematics import fourbar as fb
+from ..kinematics.wrapping import chain_geometry, roller_positions
+from . import multibody_kernels as K
+from .base import Inputs, Model, SimulationDiverged
+
+__all__ = ["MultibodyModel", "flank_geometry"]
+
+#: a roller closer than clearance + this fraction of the pitch to a seat centre is "engaged"
+ENGAGED_TOLERANCE = 0.05
+#: the driver is "at rest" below this speed [rad/s]; velocity_ratio is then the geometric one
+REST_SPEED = 1e-3
+#: communication steps are split into chunks of at most this many fixed steps for the compiled
+#: loop (the inputs are interpolated by a cubic Hermite within a chunk)
+CHUNK_STEPS = 64
+
+
+def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[float, float, float]:
+    """(gamma, beta, tip) of the seat profile of a sprocket with ``teeth`` teeth.
+
+    ISO 606 gives the roller seating angle as seating_angle - 90 deg / z (120 deg minimum,
+    140 deg maximum); the seat circle covers gamma = seating_angle / 2 - 45 deg / z either side
+    of the inward radial, and the flanks continue it tangentially, inclined by
+    beta = 90 deg - gamma to the radial. The flanks end where a roller centre clears the tooth
+    tip: tip = p (0.5625 - 0.4 / z) above the seat centre (ISO 606 mean tip diameter
+    d + p (1.125 - 0.8 / z) - d1, plus the roller radius d1 / 2). seating_angle >= pi gives the
+    paper's half circle (gamma = 90 deg, no flank, contact only inside the pitch circle).
+    """
+    if seating_angle >= math.pi:
+        return math.pi / 2, 0.0, 0.0
+    gamma = seating_angle / 2 - math.pi / (4 * teeth)
+    return gamma, math.pi / 2 - gamma, pitch * (0.5625 - 0.4 / teeth)
+
+
+class MultibodyModel(Model):
+    """Level 3 (see module docstring)."""
+
+    level = 3
+    name = "multibody"
+    second_order = True
+    #: the compiled velocity-Verlet loop: one force evaluation pair per step at 90 % of the
+    #: stable step (docs/multibody.md, benchmark in docs/performance.md)
+    preferred_method = "verlet"
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any], *, use_numba: bool | None = None):
+        super().__init__(drive, params)
+        # the scene validates already; a direct caller gets the same checks and messages
+        self.params = p = PRM.validate({k: v for k, v in params.items() if k in PRM.BY_NAME})
+        if drive.links < 3:  # pragma: no cover - Drive asks for >= 4
+            raise ValueError(f"drive.links must be at least 3, got {drive.links}")
+        self.M = M = drive.links
+        self.use_numba = K.numba_enabled() if use_numba is None else bool(use_numba)
+        if self.use_numba and not K.HAVE_NUMBA:
+            raise ValueError("use_numba=True but numba is not installed")
+        pitch = drive.pitch
+        k = p["chain.link_stiffness"]
+        l0 = pitch - p["chain.pretension"] / k
+        clearance = p["contact.seat_radius"] - p["chain.roller_radius"]
+        s = fb.seating(drive)
+        g1 = flank_geometry(drive.n_driver, pitch, p["contact.seating_angle"])
+        g2 = flank_geometry(drive.n_driven, pitch, p["contact.seating_angle"])
+        th1 = drive.centre_angle
+        incl = p["drive.inclination"]
+        g = p["gravity"]
+        vals = dict(
+            m=p["chain.link_mass"], k=k, c=p["chain.link_damping"], l0=l0,
+            kc=p["contact.stiffness"], cc=p["contact.damping"], clearance=clearance,
+            gx=g * math.sin(th1 - incl), gy=-g * math.cos(th1 - incl),
+            I1=p["driver.inertia"], I2=p["driven.inertia"], kr=p["input_shaft.stiffness"],
+            cr=p["input_shaft.damping"], c2=p["driven.damping"], cx=drive.x_c, cy=drive.y_c,
+            R1=drive.driver.pitch_radius, R2=drive.driven.pitch_radius, phase1=s.theta4,
+            phase2=s.theta2, pitch_angle1=2 * math.pi / drive.n_driver,
+            pitch_angle2=2 * math.pi / drive.n_driven,
+            sin_gamma1=math.sin(g1[0]), cos_gamma1=math.cos(g1[0]), sin_gamma2=math.sin(g2[0]),
+            cos_gamma2=math.cos(g2[0]), tip1=g1[2], tip2=g2[2],
+            paper_contact=float(p["contact.seating_angle"] >= math.pi),
+            paper_damping=float(p["multibody.paper_damping"]),
+            q_forces=float(p["multibody.rotating_frame_forces"]),
+            rigid_shaft=float(p["input_shaft.rigid"]), l_min=0.5 * pitch, l_max=1.5 * pitch,
+            z1=drive.n_driver, z2=drive.n_driven)
+        # rollers farther than this from a sprocket centre cannot touch its teeth (the flank
+        # ends at tip; sl <= tip needs |r| cos(pi / z) <= R + tip); 0.1 p keeps the engaged
+        # test of the outputs inside it
+        for key, teeth, R, tip in (("reach1", drive.n_driver, drive.driver.pitch_radius, g1[2]),
+                                   ("reach2", drive.n_driven, drive.driven.pitch_radius, g2[2])):
+            vals[key] = (R + max(tip, 0.1 * pitch)) / math.cos(math.pi / teeth) + clearance
+        self.P = K.pack_tables(np.array([vals[f] for f in K.PARAM_FIELDS], float))
+        self.flank = {"gamma_driver": g1[0], "gamma_driven": g2[0], "tip_driver": g1[2],
+                      "tip_driven": g2[2], "clearance": clearance}
+        self.ws = K.Workspace(M)
+        # fixed points in the middle of each span's straight line in the reference layout: the
+        # span tension is measured in the link whose midpoint is nearest to them
+        g0 = chain_geometry(drive, np.array([0.0]), np.array([0.0]))
+        self._mid_upper = complex(0.5 * (g0.upper.start[0] + g0.upper.end[0]))
+        self._mid_lower = complex(0.5 * (g0.lower.start[0] + g0.lower.end[0]))
+        self._n_upper, self._n_lower = int(g0.upper_links[0]), int(g0.lower_links[0])
+        self._centres = np.array([[drive.x_c, drive.y_c], [0.0, 0.0]])
+        self._mids = np.array([[self._mid_upper.real, self._mid_upper.imag],
+                               [self._mid_lower.real, self._mid_lower.imag]])
+        self._spans_out = np.zeros((2, 3), np.int64)
+        self._out14 = np.zeros(len(K.OUTPUT_NAMES))
+        self._engaged_tol = clearance + ENGAGED_TOLERANCE * pitch
+
+    # --- state -----------------------------------------------------------------------------
+    @cached_property
+    def state_names(self) -> tuple[str, ...]:
+        q = ["driver.angle", "driven.angle"]
+        v = ["driver.speed", "driven.speed"]
+        for i in range(self.M):
+            q += [f"roller[{i}].x", f"roller[{i}].y"]
+            v += [f"roller[{i}].vx", f"roller[{i}].vy"]
+        return tuple(q + v)
+
+    def state_scale(self) -> np.ndarray:
+        """Typical magnitude of each state (absolute tolerances of the adaptive steppers)."""
+        n = 2 + 2 * self.M
+        sc = np.empty(2 * n)
+        sc[:2] = 1.0
+        sc[2:n] = 1e-2 * self.drive.pitch
+        sc[n:n + 2] = 1.0
+        sc[n + 2:] = 1e-2
+        return sc
+
+    def rest_driven_angle(self, driver_angle: float) -> float:
+        """Driven rotation at which both spans of the rigid layout are stretched equally (rest
+        with no load: the free driven sprocket balances the span tensions); the four-bar angle
+        when the chain wraps without stretch."""
+        from scipy.optimize import brentq
+        d = self.drive
+        phi2_k = float(driven_rotation(d, driver_angle).driven_angle)
+
+        def unequal(phi2):
+            g = chain_geometry(d, np.array([driver_angle]), np.array([phi2]))
+            return float(g.upper.length[0] / g.upper_links[0] - g.lower.length[0] / g.lower_links[0])
+
+        a_o = math.pi / d.n_driven
+        f0 = unequal(phi2_k)
+        if abs(f0) < 1e-12 * d.pitch:
+            return phi2_k
+        lo, hi = (phi2_k - a_o, phi2_k) if f0 < 0 else (phi2_k, phi2_k + a_o)
+        try:
+            return float(brentq(unequal, lo, hi, xtol=1e-14))
+        except ValueError:
+            return phi2_k
+
+    def initial_state(self, u: Inputs) -> np.ndarray:
+        """At rest, the chain wrapped with straight spans (kinematics.wrapping.roller_positions)
+        at driver rotation u.angle and the driven rotation that stretches both spans equally."""
+        phi1 = float(u.angle)
+        phi2 = self.rest_driven_angle(phi1)
+        z = roller_positions(self.drive, phi1, phi2)
+        n = 2 + 2 * self.M
+        x = np.zeros(2 * n)
+        x[0], x[1] = phi1, phi2
+        x[2:n] = z.ravel()
+        return x
+
+    # --- dynamics --------------------------------------------------------------------------
+    def _accel(self, x, tau, tau_d, tau_dd, load, use_numba=None):
+        n = 2 + 2 * self.M
+        fn = K.accel_numba if (self.use_numba if use_numba is None else use_numba) else K.accel_numpy
+        return fn(x[:n], x[n:], tau, tau_d, tau_dd, load, self.P, self.ws)
+
+    def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
+        n = 2 + 2 * self.M
+        a, _, _ = self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
+        out = np.empty(2 * n)
+        out[:n] = x[n:]
+        out[n:] = a
+        return out
+
+    def check(self, t: float, x: np.ndarray) -> None:
+        super().check(t, x)
+        n = 2 + 2 * self.M
+        z = x[2:n].reshape(self.M, 2)
+        L = np.hypot(*(np.roll(z, -1, axis=0) - z).T) / self.drive.pitch
+        if np.any(L > 1.5) or np.any(L < 0.5):
+            i = int(np.argmax(np.abs(L - 1.0)))
+            raise SimulationDiverged(
+                f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
+                "pitches; try a smaller solver.step or solver.method = radau")
+
+    def advance_compiled(self, method, t0, t1, x, h, source):
+        """The fixed-step loop of :mod:`chainmodel.integrate` (``verlet`` exactly as
+        ``Verlet._step``, ``rk4`` as ``RK4._step``) compiled with numba over one communication
+        step; None (use the Python loop) without numba. Inputs inside a chunk of at most
+        CHUNK_STEPS steps come from a cubic Hermite through the chunk ends' angle and speed
+        (exact for the held and ramp profiles). Returns (x, steps, events, evaluations, [])."""
+        if not self.use_numba or method not in ("verlet", "rk4"):
+            return None
+        code = 0 if method == "verlet" else 1
+        n = max(1, math.ceil((t1 - t0) / h - 1e-9))
+        hh = (t1 - t0) / n
+        x = np.array(x, float)
+        done = 0
+        u0 = source(t0)
+        while done < n:
+            m = min(CHUNK_STEPS, n - done)
+            ta = t0 + done * hh
+            tb = t0 + (done + m) * hh if done + m < n else t1
+            u1 = source(tb)
+            bad = K.run_fixed_numba(code, x, ta, hh, m, ta, tb - ta, u0.angle, u0.speed,
+                                    u1.angle, u1.speed, u0.torque, u1.torque, self.P, self.ws)
+            if bad >= 0:
+                tb = ta + (bad + 1) * hh
+                self.check(tb, x)
+                raise SimulationDiverged(f"multibody model diverged at t = {tb:.6g} s "
+                                         f"(non-finite forces); try a smaller solver.step")
+            done += m
+            u0 = u1
+        evals = n * (2 if code == 0 else 4)
+        return x, n, 0, evals, []
+
+    # --- capabilities ----------------------------------------------------------------------
+    def omega_max(self, x=None) -> float:
+        """Upper bound of the highest natural frequency [rad/s] (Gershgorin on the
+        mass-normalised tangent stiffness; derivation in docs/multibody.md), raised to the
+        damping rate (4 c + c_c) / m if that is larger."""
+        p, d = self.params, self.drive
+        m, k = p["chain.link_mass"], p["chain.link_stiffness"]
+        kc = p["contact.stiffness"]
+        k_link = k
+        if x is not None:
+            n = 2 + 2 * self.M
+            z = np.asarray(x[2:n], float).reshape(self.M, 2)
+            L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
+            if np.all(np.isfinite(L)) and np.all(L > 0):
+                tension = k * (L - self.P[K.I_L0])
+                k_link = max(k, float(np.max(np.abs(tension) / L)))
+        w2 = 0.0
+        for teeth, R, tip, inertia, extra in (
+                (d.n_driver, d.driver.pitch_radius, self.P[K.I_TIP1], p["driver.inertia"],
+                 p["input_shaft.stiffness"]),
+                (d.n_driven, d.driven.pitch_radius, self.P[K.I_TIP2], p["driven.inertia"], 0.0)):
+            r = R + tip
+            coupling = kc * r / math.sqrt(m * inertia)
+            roller = (4 * k_link + kc) / m + coupling
+            seats = min(teeth, self.M)
+            sprocket = (extra + seats * kc * r * r) / inertia + seats * coupling
+            w2 = max(w2, roller, sprocket)
+        damping_rate = (4 * p["chain.link_damping"] + p["contact.damping"]) / m
+        return max(math.sqrt(w2), damping_rate)
+
+    def stable_step(self, x: np.ndarray) -> float:
+        return 1.0 / self.omega_max(x)
+
+    def jacobian_sparsity(self):
+        """d(rhs)/dx pattern: dq/dt = v; a roller's acceleration depends on its neighbours'
+        and its own positions and velocities and on both sprockets'; the sprockets' on every
+        roller's (any roller may touch a seat)."""
+        from scipy.sparse import lil_matrix
+        M = self.M
+        n = 2 + 2 * M
+        S = lil_matrix((2 * n, 2 * n), dtype=np.int8)
+        for i in range(n):
+            S[i, n + i] = 1
+        for base in (0, n):
+            S[n:n + 2, base:base + n] = 1
+            for i in range(M):
+                rows = [n + 2 + 2 * i, n + 3 + 2 * i]
+                for j in (i - 1, i, i + 1):
+                    jj = j % M
+                    for r in rows:
+                        S[r, base + 2 + 2 * jj] = 1
+                        S[r, base + 3 + 2 * jj] = 1
+                        S[r, base] = 1
+                        S[r, base + 1] = 1
+        return S.tocsr()
+
+    def static_tension(self) -> float:
+        """Static span tension at rest with no load [N]: the mean of the two span tensions
+        (measured as the outputs are) after the chain has settled from the initial layout with
+        the driver held by the input shaft at angle 0 and no load (dynamic relaxation with
+        extra link damping; the equilibrium does not depend on damping)."""
+        return self._static[0]
+
+    @cached_property
+    def _static(self) -> tuple[float, float, float]:
+        relax = dict(self.params)
+        m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
+        relax["chain.link_damping"] = max(relax["chain.link_damping"], 0.25 * math.sqrt(k * m))
+        relax["driven.damping"] = max(relax["driven.damping"],
+                                      0.2 * math.sqrt(relax["driven.inertia"] * 1e4))
+        relax["multibody.rotating_frame_forces"] = False
+        model = MultibodyModel(self.drive, relax, use_numba=self.use_numba)
+        from ..integrate import Verlet
+        u = Inputs(0.0, 0.0, 0.0)
+        st = Verlet(model, 0.0, None, u)
+        up, low = [], []
+        for i in range(1, 61):
+            out = st.advance(i * 1e-3, u)
+            if i > 40:
+                up.append(out["tight_span.tension"])
+                low.append(out["slack_span.tension"])
+        tu, tl = float(np.mean(up)), float(np.mean(low))
+        return 0.5 * (tu + tl), tu, tl
+
+    # --- outputs ---------------------------------------------------------------------------
+    def output_descriptions(self) -> dict[str, str]:
+        d = super().output_descriptions()
+        d["tight_span.tension"] = ("axial force of the tight-span link whose midpoint is nearest "
+                                   "the middle of the span's line (upper span when driving "
+                                   "forward)")
+        d["slack_span.tension"] = ("axial force of the slack-span link whose midpoint is nearest "
+                                   "the middle of the span's line")
+        d["tight_span.length"] = ("distance between the tight span's endpoint rollers (the last "
+                                  "roller engaged on the sprocket it leaves, the first on the one "
+                                  "it runs onto)")
+        d["velocity_ratio"] = ("driven speed / driver speed; while the driver is at rest "
+                               f"(|speed| < {REST_SPEED:g} rad/s) the exact four-bar ratio at the "
+                               "driver's angle (level 0)")
+        d["input_shaft.torque"] = ("input-shaft spring and damper torque k_r (tau - phi1) + "
+                                   "c_r (tau' - phi1') (rigid shaft: I1 tau'' minus the chain's "
+                                   "torque on the driver)")
+        d["driven.acceleration"] = "driven sprocket angular acceleration from eq (15)"
+        d["tight_span.midspan_deflection"] = (
+            "distance of the tight span's middle roller from the line between its endpoint "
+            "rollers, positive away from the line of centres")
+        d["chain.max_link_tension"] = "largest axial link force in the chain"
+        d["contact.max_force"] = "largest roller-seat normal contact force"
+        return d
+
+    def _engaged(self):
+        return self.ws.dist <= self._engaged_tol
+
+    def _evaluate(self, t, x, u):
+        """Forces at (t, x, u) and the spans: ((mid link, start roller, end roller) of the upper
+        and the lower span; see multibody_kernels._spans_loops)."""
+        n = 2 + 2 * self.M
+        acc, status, shaft = self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
+        spans = self._spans_out
+        if self.use_numba:
+            K.spans_numba(x[:n], self.ws.dist, self._engaged_tol, self._mids, spans)
+        else:
+            K.spans_numpy(x[:n], self.ws.dist, self._engaged_tol, self._mids, spans)
+        z = x[2:n].reshape(self.M, 2)
+        return acc, shaft, z, tuple(int(i) for i in spans[0]), tuple(int(i) for i in spans[1])
+
+    def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
+        if self.use_numba:
+            out = self._out14
+            K.outputs_numba(np.asarray(x, float), u.angle, u.speed, u.acceleration, u.torque,
+                            self.P, self.ws, self._mids, self._engaged_tol, u.speed < 0,
+                            self.drive.tooth_ratio, self._spans_out, out)
+            res = dict(zip(K.OUTPUT_NAMES, out.tolist()))
+            if abs(res["driver.speed"]) < REST_SPEED:
+                res["velocity_ratio"] = float(driven_rotation(
+                    self.drive, res["driver.angle"], reverse=u.speed < 0).velocity_ratio)
+            return res
+        return self._outputs_numpy(t, x, u)
+
+    def _outputs_numpy(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
+        p = self.params
+        n = 2 + 2 * self.M
+        acc, shaft, z, up, low = self._evaluate(t, x, u)
+        rigid = p["input_shaft.rigid"]
+        phi1 = u.angle if rigid else x[0]
+        w1 = u.speed if rigid else x[n]
+        phi2, w2 = x[1], x[n + 1]
+        reverse = u.speed < 0
+        tension = self.ws.tension
+        tight, slack = (low, up) if reverse else (up, low)
+        centre_from = self._centres[0] if reverse else self._centres[1]
+        _, a, b = tight
+        A, B = z[a], z[b]
+        nl = (b - a) % self.M
+        mid_z = (z[(a + nl // 2) % self.M] if nl % 2 == 0 else
+                 0.5 * (z[(a + nl // 2) % self.M] + z[(a + nl // 2 + 1) % self.M]))
+        chord = B - A
+        length = float(math.hypot(*chord))
+        if length > 0:
+            normal = np.array([-chord[1], chord[0]]) / length
+            if normal @ (A - centre_from) < 0:
+                normal = -normal
+            deflection = float(normal @ (mid_z - A))
+        else:  # pragma: no cover
+            deflection = 0.0
+        if abs(w1) >= REST_SPEED:
+            ratio = w2 / w1
+        else:
+            ratio = float(driven_rotation(self.drive, phi1, reverse=reverse).velocity_ratio)
+        return {
+            "driver.angle": float(phi1),
+            "driver.speed": float(w1),
+            "driven.angle": float(phi2),
+            "driven.speed": float(w2),
+            "driven.acceleration": float(acc[1]),
+            "input_shaft.torque": float(shaft),
+            "tight_span.tension": float(tension[tight[0]]),
+            "slack_span.tension": float(tension[slack[0]]),
+            "tight_span.length": length,
+            "velocity_ratio": float(ratio),
+            "transmission_error": float(phi2 - self.drive.tooth_ratio * phi1),
+            "tight_span.midspan_deflection": deflection,
+            "chain.max_link_tension": float(np.max(tension)),
+            "contact.max_force": float(np.max(self.ws.fcon)),
+        }
+
+    def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
+        """Arrays for plots: roller_positions (M, 2) [m], link_tension (M,) [N] (link i joins
+        roller i and i+1), contact_force (M,) [N], contact_sprocket (M,) (0 free, 1 driver,
+        2 driven), engaged_driver / engaged_driven (M,) bool, tight_span_rollers (2,) (endpoint
+        roller indices), seat_positions_driver (z1, 2), seat_positions_driven (z2, 2)."""
+        acc, shaft, z, up, low = self._evaluate(t, x, u)
+        d = self.drive
+        engaged = self._engaged()
+        tight = low if u.speed < 0 else up
+        seats = []
+        for s, (teeth, R, cen) in enumerate(((d.n_driver, d.driver.pitch_radius, self._centres[0]),
+                                             (d.n_driven, d.driven.pitch_radius, self._centres[1]))):
+            phase = self.P[K.I_PH1 + s] - x[s]
+            ang = phase + 2 * math.pi / teeth * np.arange(teeth)
+            seats.append(cen + R * np.column_stack([np.cos(ang), np.sin(ang)]))
+        return {"roller_positions": z.copy(),
+                "link_tension": self.ws.tension.copy(),
+                "contact_force": self.ws.fcon.copy(),
+                "contact_sprocket": self.ws.side.copy(),
+                "engaged_driver": engaged[0].copy(),
+                "engaged_driven": engaged[1].copy(),
+                "tight_span_rollers": np.array([tight[1], tight[2]]),
+                "seat_positions_driver": seats[0],
+                "seat_positions_driven": seats[1]}
+
+    # --- energy (tests, docs) -----------------------------------------------------------------
+    def energy(self, x: np.ndarray, u: Inputs) -> dict[str, float]:
+        """Kinetic energy and the potentials of U (eq A2): links, contacts, gravity, shaft [J]."""
+        p = self.params
+        n = 2 + 2 * self.M
+        q, v = x[:n], x[n:]
+        m = p["chain.link_mass"]
+        kin = 0.5 * m * float(v[2:] @ v[2:]) + 0.5 * p["driver.inertia"] * v[0] ** 2 \
+            + 0.5 * p["driven.inertia"] * v[1] ** 2
+        z = q[2:].reshape(self.M, 2)
+        L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
+        links = 0.5 * p["chain.link_stiffness"] * float(np.sum((L - self.P[K.I_L0]) ** 2))
+        self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
+        pen = np.where(self.ws.side > 0, self.ws.fcon / p["contact.stiffness"], 0.0)
+        contact = 0.5 * p["contact.stiffness"] * float(pen @ pen)
+        grav = -m * float(np.sum(z[:, 0] * self.P[K.I_GX] + z[:, 1] * self.P[K.I_GY]))
+        shaft = 0.0 if p["input_shaft.rigid"] else 0.5 * p["input_shaft.stiffness"] * (u.angle - q[0]) ** 2
+        return {"kinetic": kin, "links": links, "contact": contact, "gravity": grav,
+                "shaft": shaft}
+

@@ -1,0 +1,665 @@
+"""Force kernels and fixed-step loops of the multibody model (level 3), in two implementations
+that compute the same thing: explicit loops compiled by numba (fast path) and vectorised numpy
+(fallback for environments without numba, e.g. inside the FMU).
+
+The equations are derived in docs/multibody.md from the Lagrangian of seed 003's appendix
+(kinetic energy T eq A1, deformation energy U eq A2, dissipation S eq A3; Lagrange's equation
+eq 11); :mod:`chainmodel.models.multibody` explains the choices. Coordinates (lead's XY frame of
+seed 000/004): q = [phi1, phi2, x_0, y_0, x_1, y_1, ...], v = dq/dt, with phi1 (driver) and phi2
+(driven) forward-positive, i.e. clockwise in XY. A seat j of sprocket s sits at angle
+``phase0_s - phi_s + (2 pi / z_s) j`` about the sprocket centre.
+
+Set the environment variable ``CHAINMODEL_NO_NUMBA=1`` to force the numpy path.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+__all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
+           "PARAM_FIELDS", "N_PARAMS"]
+
+# layout of the float64 parameter vector handed to the kernels
+PARAM_FIELDS = (
+    "m", "k", "c", "l0", "kc", "cc", "clearance", "gx", "gy", "I1", "I2", "kr", "cr", "c2",
+    "cx", "cy", "R1", "R2", "phase1", "phase2", "pitch_angle1", "pitch_angle2",
+    "sin_gamma1", "cos_gamma1", "sin_gamma2", "cos_gamma2", "tip1", "tip2", "paper_contact",
+    "paper_damping", "q_forces", "rigid_shaft", "l_min", "l_max", "z1", "z2", "reach1",
+    "reach2",
+)
+(I_M, I_K, I_C, I_L0, I_KC, I_CC, I_DR, I_GX, I_GY, I_I1, I_I2, I_KR, I_CR, I_C2,
+ I_CX, I_CY, I_R1, I_R2, I_PH1, I_PH2, I_TA1, I_TA2, I_SG1, I_CG1, I_SG2, I_CG2, I_TIP1, I_TIP2,
+ I_PAPER_CONTACT, I_PAPER_DAMP, I_QF, I_RIGID, I_LMIN, I_LMAX, I_Z1, I_Z2, I_REACH1,
+ I_REACH2) = range(len(PARAM_FIELDS))
+#: P holds these scalars, then the tables cos(2 pi j / z1), sin(...) (j < z1), then the same
+#: for z2 (see :func:`pack_tables`): seat directions without trigonometry in the hot loop
+N_PARAMS = len(PARAM_FIELDS)
+
+
+def pack_tables(P: np.ndarray) -> np.ndarray:
+    """P with the seat-direction tables appended (z1, z2 taken from P)."""
+    z1, z2 = int(P[I_Z1]), int(P[I_Z2])
+    j1, j2 = np.arange(z1), np.arange(z2)
+    return np.concatenate([P[:N_PARAMS], np.cos(2 * np.pi * j1 / z1), np.sin(2 * np.pi * j1 / z1),
+                           np.cos(2 * np.pi * j2 / z2), np.sin(2 * np.pi * j2 / z2)])
+
+try:  # pragma: no cover - depends on the environment
+    import numba as _numba
+    HAVE_NUMBA = True
+except Exception:  # pragma: no cover
+    _numba = None
+    HAVE_NUMBA = False
+
+
+def numba_enabled() -> bool:
+    """True when the numba kernels are available and not disabled by CHAINMODEL_NO_NUMBA."""
+    return HAVE_NUMBA and os.environ.get("CHAINMODEL_NO_NUMBA", "").strip() in ("", "0")
+
+
+# --- explicit-loop kernel (compiled by numba) -------------------------------------------------
+
+def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist, seat_angle):
+    """Accelerations ``a`` (same layout as q) and diagnostics; returns (status, shaft torque).
+
+    status 0: fine; 1: a link is stretched or compressed beyond [l_min, l_max] or a
+    coordinate is not finite (the integration has diverged).
+    tension[i]: axial force of link i (roller i to roller i+1), positive in tension.
+    fcon[i]: normal contact force on roller i; side[i]: 0 free, 1 driver, 2 driven.
+    dist[s, i]: distance of roller i from the nearest seat centre of sprocket s.
+    seat_angle[s, i]: angle of that seat about the sprocket centre.
+    """
+    n = q.shape[0]
+    M = (n - 2) // 2
+    m = P[I_M]
+    k = P[I_K]
+    c = P[I_C]
+    l0 = P[I_L0]
+    kc = P[I_KC]
+    cc = P[I_CC]
+    dR = P[I_DR]
+    paper_contact = P[I_PAPER_CONTACT] != 0.0
+    paper_damp = P[I_PAPER_DAMP] != 0.0
+    rigid = P[I_RIGID] != 0.0
+    lmin = P[I_LMIN]
+    lmax = P[I_LMAX]
+    if rigid:
+        phi1 = tau
+        w1 = tau_d
+    else:
+        phi1 = q[0]
+        w1 = v[0]
+    phi2 = q[1]
+    w2 = v[1]
+    status = 0
+    for i in range(2, n):
+        a[i] = 0.0
+    # links: U = k/2 (|d| - l0)^2, S = c/2 (e . dv)^2 (axial) or c/2 |dv|^2 (paper)
+    for i in range(M):
+        j = i + 1
+        if j == M:
+            j = 0
+        dx = q[2 + 2 * j] - q[2 + 2 * i]
+        dy = q[3 + 2 * j] - q[3 + 2 * i]
+        L = math.sqrt(dx * dx + dy * dy)
+        if not (L > lmin and L < lmax):
+            status = 1
+            if not L > 0.0:
+                L = 1e-300
+        ex = dx / L
+        ey = dy / L
+        dvx = v[2 + 2 * j] - v[2 + 2 * i]
+        dvy = v[3 + 2 * j] - v[3 + 2 * i]
+        rate = ex * dvx + ey * dvy
+        if paper_damp:
+            T = k * (L - l0)
+            fx = T * ex + c * dvx
+            fy = T * ey + c * dvy
+            tension[i] = T + c * rate
+        else:
+            T = k * (L - l0) + c * rate
+            fx = T * ex
+            fy = T * ey
+            tension[i] = T
+        a[2 + 2 * i] += fx
+        a[3 + 2 * i] += fy
+        a[2 + 2 * j] -= fx
+        a[3 + 2 * j] -= fy
+    # roller-seat contact (eqs 5-10 with the seat/flank profile, see module docstring)
+    torque1 = 0.0
+    torque2 = 0.0
+    z1 = int(P[I_Z1])
+    z2 = int(P[I_Z2])
+    ph1 = P[I_PH1] - phi1
+    ph2 = P[I_PH2] - phi2
+    cph1 = math.cos(ph1)
+    sph1 = math.sin(ph1)
+    cph2 = math.cos(ph2)
+    sph2 = math.sin(ph2)
+    for i in range(M):
+        x = q[2 + 2 * i]
+        y = q[3 + 2 * i]
+        vx = v[2 + 2 * i]
+        vy = v[3 + 2 * i]
+        side[i] = 0
+        fcon[i] = 0.0
+        for s in range(2):
+            if s == 0:
+                cx = P[I_CX]
+                cy = P[I_CY]
+                R = P[I_R1]
+                ph = ph1
+                cph = cph1
+                sph = sph1
+                ta = P[I_TA1]
+                w = w1
+                tip = P[I_TIP1]
+                sg = P[I_SG1]
+                cg = P[I_CG1]
+                zt = z1
+                tab = N_PARAMS
+                reach = P[I_REACH1]
+            else:
+                cx = 0.0
+                cy = 0.0
+                R = P[I_R2]
+                ph = ph2
+                cph = cph2
+                sph = sph2
+                ta = P[I_TA2]
+                w = w2
+                tip = P[I_TIP2]
+                sg = P[I_SG2]
+                cg = P[I_CG2]
+                zt = z2
+                tab = N_PARAMS + 2 * z1
+                reach = P[I_REACH2]
+            rx = x - cx
+            ry = y - cy
+            if rx * rx + ry * ry > reach * reach:
+                # beyond the tooth tips: no seat can touch this roller
+                dist[s, i] = math.inf
+                seat_angle[s, i] = 0.0
+                continue
+            jj = math.floor((math.atan2(ry, rx) - ph) / ta + 0.5)
+            th = ph + ta * jj
+            jm = jj % zt
+            ct = cph * P[tab + jm] - sph * P[tab + zt + jm]
+            st = sph * P[tab + jm] + cph * P[tab + zt + jm]
+            dx = rx - R * ct
+            dy = ry - R * st
+            d = math.sqrt(dx * dx + dy * dy)
+            dist[s, i] = d
+            seat_angle[s, i] = th
+            pen = -1.0
+            nx = 0.0
+            ny = 0.0
+            if paper_contact:
+                if rx * rx + ry * ry <= R * R and d > dR:
+                    pen = d - dR
+                    nx = dx / d
+                    ny = dy / d
+            else:
+                sl = dx * ct + dy * st
+                if sl <= tip and d > 0.0:
+                    if -sl >= d * cg:
+                        pen = d - dR
+                        nx = dx / d
+                        ny = dy / d
+                    else:
+                        tl = -dx * st + dy * ct
+                        sgn = 1.0 if tl >= 0.0 else -1.0
+                        pen = abs(tl) * sg - sl * cg - dR
+                        nx = -sgn * sg * st - cg * ct
+                        ny = sgn * sg * ct - cg * st
+            if pen > 0.0:
+                cross = rx * ny - ry * nx
+                if paper_damp:
+                    Fn = kc * pen
+                    dvx = w * R * st - vx
+                    dvy = -w * R * ct - vy
+                    fx = -Fn * nx + cc * dvx
+                    fy = -Fn * ny + cc * dvy
+                    tq = -Fn * cross - cc * R * (dvx * st - dvy * ct)
+                else:
+                    # normal rate relative to the sprocket body at the roller: w (ry, -rx)
+                    pend = nx * (vx - w * ry) + ny * (vy + w * rx)
+                    Fn = kc * pen + cc * pend
+                    if Fn < 0.0:
+                        Fn = 0.0
+                    fx = -Fn * nx
+                    fy = -Fn * ny
+                    tq = -Fn * cross
+                a[2 + 2 * i] += fx
+                a[3 + 2 * i] += fy
+                if s == 0:
+                    torque1 += tq
+                else:
+                    torque2 += tq
+                side[i] = s + 1
+                fcon[i] += Fn
+    # sprockets
+    if rigid:
+        a[0] = tau_dd
+        shaft = P[I_I1] * tau_dd - torque1
+    else:
+        shaft = P[I_KR] * (tau - q[0]) + P[I_CR] * (tau_d - v[0])
+        a[0] = (shaft + torque1) / P[I_I1]
+    a[1] = (torque2 - load - P[I_C2] * w2) / P[I_I2]
+    # gravity, the appendix's rotating-frame forces (eqs A4-A7) if switched on, and 1/m
+    gx = P[I_GX] * m
+    gy = P[I_GY] * m
+    qf = P[I_QF] != 0.0
+    for i in range(M):
+        fx = gx
+        fy = gy
+        if qf and side[i] > 0:
+            s = side[i] - 1
+            th = seat_angle[s, i]
+            if s == 0:
+                R = P[I_R1]
+                w = w1
+                al = a[0]
+            else:
+                R = P[I_R2]
+                w = w2
+                al = a[1]
+            fx += m * R * (w * w * math.cos(th) - al * math.sin(th))
+            fy += m * R * (w * w * math.sin(th) + al * math.cos(th))
+        a[2 + 2 * i] = (a[2 + 2 * i] + fx) / m
+        a[3 + 2 * i] = (a[3 + 2 * i] + fy) / m
+    for i in range(n):
+        if not (a[i] - a[i] == 0.0):
+            status = 1
+    return status, shaft
+
+
+def _hermite(t, T0, H, a0, w0, a1, w1):
+    """Input-shaft angle, speed, acceleration at t from a cubic Hermite through (a0, w0) at T0
+    and (a1, w1) at T0 + H: exact for the linear (held) and quadratic (ramp) profiles."""
+    if H <= 0.0:
+        return a0, w0, 0.0
+    s = (t - T0) / H
+    s2 = s * s
+    s3 = s2 * s
+    ang = (2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * H * w0 + (-2 * s3 + 3 * s2) * a1 \
+        + (s3 - s2) * H * w1
+    spd = ((6 * s2 - 6 * s) * a0 + (-6 * s2 + 6 * s) * a1) / H + (3 * s2 - 4 * s + 1) * w0 \
+        + (3 * s2 - 2 * s) * w1
+    acc = ((12 * s - 6) * a0 + (-12 * s + 6) * a1) / (H * H) + ((6 * s - 4) * w0
+                                                              + (6 * s - 2) * w1) / H
+    return ang, spd, acc
+
+
+def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
+                     acc, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle):
+    """Advance x in place by ``nsteps`` fixed steps of ``method`` (0 velocity Verlet exactly as
+    chainmodel.integrate.Verlet, 1 classic RK4); inputs from :func:`_hermite` and a linear load.
+    Returns -1 on success or the index of the step after which the state diverged."""
+    n = x.shape[0]
+    nq = n // 2
+    q = x[:nq]
+    v = x[nq:]
+    for step in range(nsteps):
+        t = t0 + step * h
+        if method == 0:
+            ang, spd, ac = _HERMITE(t, T0, H, a0, w0, a1, w1)
+            ld = L0 + (L1 - L0) * ((t - T0) / H if H > 0 else 0.0)
+            st, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc, tension, fcon, side, dist,
+                                 seat_angle)
+            for i in range(nq):
+                v[i] += 0.5 * h * acc[i]
+                q[i] += h * v[i]
+            ang, spd, ac = _HERMITE(t + h, T0, H, a0, w0, a1, w1)
+            ld = L0 + (L1 - L0) * ((t + h - T0) / H if H > 0 else 0.0)
+            st2, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc2, tension, fcon, side, dist,
+                                  seat_angle)
+            for i in range(nq):
+                v[i] += 0.5 * h * acc2[i]
+            if st2 != 0:
+                return step
+        else:
+            for stage in range(4):
+                if stage == 0:
+                    tt = t
+                    for i in range(n):
+                        xt[i] = x[i]
+                    kk = k1
+                elif stage == 1:
+                    tt = t + 0.5 * h
+                    for i in range(n):
+                        xt[i] = x[i] + 0.5 * h * k1[i]
+                    kk = k2
+                elif stage == 2:
+                    tt = t + 0.5 * h
+                    for i in range(n):
+                        xt[i] = x[i] + 0.5 * h * k2[i]
+                    kk = k3
+                else:
+                    tt = t + h
+                    for i in range(n):
+                        xt[i] = x[i] + h * k3[i]
+                    kk = k4
+                ang, spd, ac = _HERMITE(tt, T0, H, a0, w0, a1, w1)
+                ld = L0 + (L1 - L0) * ((tt - T0) / H if H > 0 else 0.0)
+                st, _ = _ACCEL(xt[:nq], xt[nq:], ang, spd, ac, ld, P, acc, tension, fcon,
+                                     side, dist, seat_angle)
+                for i in range(nq):
+                    kk[i] = xt[nq + i]
+                    kk[nq + i] = acc[i]
+            for i in range(n):
+                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            st = 0
+            for i in range(n):
+                if not (x[i] - x[i] == 0.0):
+                    st = 1
+            if st != 0:
+                return step
+    return -1
+
+
+def _spans_loops(q, dist, tol, mids, out):
+    """Span bookkeeping of the outputs: for span s (0 upper: driven -> driver, 1 lower: driver
+    -> driven) the link whose midpoint is nearest mids[s], the last roller engaged (distance to
+    a seat centre <= tol) on the sprocket it leaves, going back from that link, and the first
+    engaged on the sprocket it runs onto, going forward. out[s] = (mid, start, end)."""
+    M = (q.shape[0] - 2) // 2
+    for span in range(2):
+        mx = mids[span, 0]
+        my = mids[span, 1]
+        best = 1e300
+        mid = 0
+        for i in range(M):
+            j = i + 1
+            if j == M:
+                j = 0
+            ex = 0.5 * (q[2 + 2 * i] + q[2 + 2 * j]) - mx
+            ey = 0.5 * (q[3 + 2 * i] + q[3 + 2 * j]) - my
+            dd = ex * ex + ey * ey
+            if dd < best:
+                best = dd
+                mid = i
+        s_from = 1 if span == 0 else 0
+        s_to = 1 - s_from
+        a = (mid + 1) % M
+        for k in range(M):
+            r = (mid - k) % M
+            if dist[s_from, r] <= tol:
+                a = r
+                break
+        b = mid
+        for k in range(M):
+            r = (mid + 1 + k) % M
+            if dist[s_to, r] <= tol:
+                b = r
+                break
+        out[span, 0] = mid
+        out[span, 1] = a
+        out[span, 2] = b
+
+
+def spans_numpy(q, dist, tol, mids, out):
+    """Vectorised :func:`_spans_loops`."""
+    M = (q.shape[0] - 2) // 2
+    z = q[2:].reshape(M, 2)
+    mp = 0.5 * (z + np.roll(z, -1, axis=0))
+    for span in range(2):
+        mid = int(np.argmin((mp[:, 0] - mids[span, 0]) ** 2 + (mp[:, 1] - mids[span, 1]) ** 2))
+        s_from = 1 if span == 0 else 0
+        back = (mid - np.arange(M)) % M
+        fwd = (mid + 1 + np.arange(M)) % M
+        eb, ef = dist[s_from][back] <= tol, dist[1 - s_from][fwd] <= tol
+        out[span] = (mid, back[np.argmax(eb)] if eb.any() else (mid + 1) % M,
+                     fwd[np.argmax(ef)] if ef.any() else mid)
+
+
+OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
+                "driven.acceleration", "input_shaft.torque", "tight_span.tension",
+                "slack_span.tension", "tight_span.length", "velocity_ratio", "transmission_error",
+                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force")
+
+
+def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
+                   mids, tol, reverse, tooth_ratio, spans, out):
+    """Every output (order OUTPUT_NAMES) at state x; the same as MultibodyModel's numpy path.
+    velocity_ratio is driven / driver speed (the caller replaces it while the driver rests)."""
+    n = x.shape[0] // 2
+    M = (n - 2) // 2
+    q = x[:n]
+    v = x[n:]
+    status, shaft = _ACCEL(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist,
+                           seat_angle)
+    _SPANS(q, dist, tol, mids, spans)
+    rigid = P[I_RIGID] != 0.0
+    phi1 = tau if rigid else q[0]
+    w1 = tau_d if rigid else v[0]
+    t_span = 1 if reverse else 0
+    s_span = 1 - t_span
+    a = spans[t_span, 1]
+    b = spans[t_span, 2]
+    ax = q[2 + 2 * a]
+    ay = q[3 + 2 * a]
+    cx = ax - (P[I_CX] if reverse else 0.0)
+    cy = ay - (P[I_CY] if reverse else 0.0)
+    chx = q[2 + 2 * b] - ax
+    chy = q[3 + 2 * b] - ay
+    length = math.sqrt(chx * chx + chy * chy)
+    nl = (b - a) % M
+    i0 = (a + nl // 2) % M
+    mx = q[2 + 2 * i0]
+    my = q[3 + 2 * i0]
+    if nl % 2 == 1:
+        i1 = (i0 + 1) % M
+        mx = 0.5 * (mx + q[2 + 2 * i1])
+        my = 0.5 * (my + q[3 + 2 * i1])
+    deflection = 0.0
+    if length > 0.0:
+        nx = -chy / length
+        ny = chx / length
+        if nx * cx + ny * cy < 0.0:
+            nx = -nx
+            ny = -ny
+        deflection = nx * (mx - ax) + ny * (my - ay)
+    tmax = tension[0]
+    fmax = fcon[0]
+    for i in range(M):
+        if tension[i] > tmax:
+            tmax = tension[i]
+        if fcon[i] > fmax:
+            fmax = fcon[i]
+    out[0] = phi1
+    out[1] = w1
+    out[2] = q[1]
+    out[3] = v[1]
+    out[4] = acc[1]
+    out[5] = shaft
+    out[6] = tension[spans[t_span, 0]]
+    out[7] = tension[spans[s_span, 0]]
+    out[8] = length
+    out[9] = v[1] / w1 if w1 != 0.0 else 0.0
+    out[10] = q[1] - tooth_ratio * phi1
+    out[11] = deflection
+    out[12] = tmax
+    out[13] = fmax
+    return status
+
+
+if HAVE_NUMBA:  # pragma: no branch
+    # numba resolves the loop's callees by their global names at compile time
+    _ACCEL = _numba.njit(cache=True)(_accel_loops)
+    _HERMITE = _numba.njit(cache=True)(_hermite)
+    _run_fixed_jit = _numba.njit(cache=True)(_run_fixed_loops)
+    _SPANS = _numba.njit(cache=True)(_spans_loops)
+    _outputs_jit = _numba.njit(cache=True)(_outputs_loops)
+else:  # pragma: no cover - plain Python (slow; for debugging only)
+    _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit = (
+        _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops)
+spans_numba = _SPANS
+_accel_jit = _ACCEL
+
+
+class Workspace:
+    """Preallocated arrays for the kernels (one per model)."""
+
+    def __init__(self, n_rollers: int):
+        M = n_rollers
+        n = 2 + 2 * M
+        self.acc = np.zeros(n)
+        self.acc2 = np.zeros(n)
+        self.k = [np.zeros(2 * n) for _ in range(4)]
+        self.xt = np.zeros(2 * n)
+        self.tension = np.zeros(M)
+        self.fcon = np.zeros(M)
+        self.side = np.zeros(M, np.int64)
+        self.dist = np.zeros((2, M))
+        self.seat_angle = np.zeros((2, M))
+
+    def diagnostics(self):
+        return self.tension, self.fcon, self.side, self.dist, self.seat_angle
+
+
+def accel_numba(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
+    """Compiled kernel: accelerations (new array unless ``out``) and (status, shaft torque);
+    diagnostics land in ``ws``."""
+    a = np.empty(q.shape[0]) if out is None else out
+    status, shaft = _accel_jit(q, v, float(tau), float(tau_d), float(tau_dd), float(load), P, a,
+                               ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle)
+    return a, int(status), float(shaft)
+
+
+def outputs_numba(x, tau, tau_d, tau_dd, load, P, ws: Workspace, mids, tol, reverse,
+                  tooth_ratio, spans, out):
+    return int(_outputs_jit(x, float(tau), float(tau_d), float(tau_dd), float(load), P, ws.acc,
+                            ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle, mids,
+                            float(tol), bool(reverse), float(tooth_ratio), spans, out))
+
+
+def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
+                    ws: Workspace) -> int:
+    k1, k2, k3, k4 = ws.k
+    return int(_run_fixed_jit(method, x, float(t0), float(h), int(nsteps), float(T0), float(H),
+                              float(a0), float(w0), float(a1), float(w1), float(L0), float(L1),
+                              P, ws.acc, ws.acc2, k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon,
+                              ws.side, ws.dist, ws.seat_angle))
+
+
+# --- vectorised numpy kernel (fallback) -------------------------------------------------------
+
+def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
+    """Same as :func:`accel_numba`, vectorised over rollers with numpy (no per-roller loops)."""
+    q = np.asarray(q, float)
+    v = np.asarray(v, float)
+    n = q.shape[0]
+    M = (n - 2) // 2
+    m, k, c, l0 = P[I_M], P[I_K], P[I_C], P[I_L0]
+    kc, cc, dR = P[I_KC], P[I_CC], P[I_DR]
+    sg = np.array([P[I_SG1], P[I_SG2]])[:, None]
+    cg = np.array([P[I_CG1], P[I_CG2]])[:, None]
+    paper_contact = P[I_PAPER_CONTACT] != 0.0
+    paper_damp = P[I_PAPER_DAMP] != 0.0
+    rigid = P[I_RIGID] != 0.0
+    phi1, w1 = (tau, tau_d) if rigid else (q[0], v[0])
+    phi2, w2 = q[1], v[1]
+    z = q[2:].reshape(M, 2)
+    zv = v[2:].reshape(M, 2)
+    F = np.zeros((M, 2))
+    # links
+    d = np.roll(z, -1, axis=0) - z
+    with np.errstate(invalid="ignore", divide="ignore"):
+        L = np.hypot(d[:, 0], d[:, 1])
+        status = int(not np.all((L > P[I_LMIN]) & (L < P[I_LMAX])))
+        Ls = np.where(L > 0, L, 1e-300)
+        e = d / Ls[:, None]
+    dv = np.roll(zv, -1, axis=0) - zv
+    rate = np.einsum("ij,ij->i", e, dv)
+    if paper_damp:
+        T = k * (L - l0)
+        f = T[:, None] * e + c * dv
+        ws.tension[:] = T + c * rate
+    else:
+        T = k * (L - l0) + c * rate
+        f = T[:, None] * e
+        ws.tension[:] = T
+    F += f
+    F -= np.roll(f, 1, axis=0)
+    # contact, both sprockets at once: arrays (2, M)
+    cen = np.array([[P[I_CX], P[I_CY]], [0.0, 0.0]])
+    R = np.array([P[I_R1], P[I_R2]])[:, None]
+    ph = np.array([P[I_PH1] - phi1, P[I_PH2] - phi2])[:, None]
+    ta = np.array([P[I_TA1], P[I_TA2]])[:, None]
+    tip = np.array([P[I_TIP1], P[I_TIP2]])[:, None]
+    w = np.array([w1, w2])[:, None]
+    rx = z[None, :, 0] - cen[:, 0, None]
+    ry = z[None, :, 1] - cen[:, 1, None]
+    near = rx * rx + ry * ry <= np.array([P[I_REACH1], P[I_REACH2]])[:, None] ** 2
+    jj = np.floor((np.arctan2(ry, rx) - ph) / ta + 0.5)
+    th = ph + ta * jj
+    ct, st = np.cos(th), np.sin(th)
+    dx = rx - R * ct
+    dy = ry - R * st
+    dd = np.hypot(dx, dy)
+    ws.dist[:] = np.where(near, dd, np.inf)
+    ws.seat_angle[:] = np.where(near, th, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux, uy = dx / dd, dy / dd
+        if paper_contact:
+            on = (rx * rx + ry * ry <= R * R) & (dd > dR)
+            pen = dd - dR
+            nx, ny = ux, uy
+        else:
+            sl = dx * ct + dy * st
+            tl = -dx * st + dy * ct
+            arc = -sl >= dd * cg
+            sgn = np.where(tl >= 0, 1.0, -1.0)
+            pen = np.where(arc, dd - dR, np.abs(tl) * sg - sl * cg - dR)
+            nx = np.where(arc, ux, -sgn * sg * st - cg * ct)
+            ny = np.where(arc, uy, sgn * sg * ct - cg * st)
+            on = (sl <= tip) & (dd > 0)
+    on &= near & (pen > 0)
+    pen = np.where(on, pen, 0.0)
+    nx = np.where(on, nx, 0.0)
+    ny = np.where(on, ny, 0.0)
+    cross = rx * ny - ry * nx
+    vx, vy = zv[None, :, 0], zv[None, :, 1]
+    if paper_damp:
+        Fn = kc * pen
+        dvx = np.where(on, w * R * st - vx, 0.0)
+        dvy = np.where(on, -w * R * ct - vy, 0.0)
+        fx = -Fn * nx + cc * dvx
+        fy = -Fn * ny + cc * dvy
+        tq = -Fn * cross - cc * R * (dvx * st - dvy * ct)
+    else:
+        pend = nx * (vx - w * ry) + ny * (vy + w * rx)
+        Fn = np.where(on, np.maximum(kc * pen + cc * pend, 0.0), 0.0)
+        fx, fy, tq = -Fn * nx, -Fn * ny, -Fn * cross
+    F[:, 0] += fx.sum(axis=0)
+    F[:, 1] += fy.sum(axis=0)
+    torque1, torque2 = float(tq[0].sum()), float(tq[1].sum())
+    side = np.where(on[1], 2, np.where(on[0], 1, 0))
+    ws.side[:] = side
+    ws.fcon[:] = Fn.sum(axis=0)
+    a = np.empty(n) if out is None else out
+    if rigid:
+        a[0] = tau_dd
+        shaft = P[I_I1] * tau_dd - torque1
+    else:
+        shaft = P[I_KR] * (tau - q[0]) + P[I_CR] * (tau_d - v[0])
+        a[0] = (shaft + torque1) / P[I_I1]
+    a[1] = (torque2 - load - P[I_C2] * w2) / P[I_I2]
+    F[:, 0] += P[I_GX] * m
+    F[:, 1] += P[I_GY] * m
+    if P[I_QF] != 0.0:
+        s = np.clip(side - 1, 0, 1)
+        thc = th[s, np.arange(M)]
+        Rc = np.array([P[I_R1], P[I_R2]])[s]
+        wc = np.array([w1, w2])[s]
+        alc = np.array([a[0], a[1]])[s]
+        h = side > 0
+        F[:, 0] += np.where(h, m * Rc * (wc * wc * np.cos(thc) - alc * np.sin(thc)), 0.0)
+        F[:, 1] += np.where(h, m * Rc * (wc * wc * np.sin(thc) + alc * np.cos(thc)), 0.0)
+    a[2:] = (F / m).ravel()
+    if not np.all(np.isfinite(a)):
+        status = 1
+    return a, status, float(shaft)
