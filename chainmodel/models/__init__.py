@@ -5,6 +5,7 @@ from .base import (ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, Inputs, Model, Outp
 from .kinematic import KinematicModel
 from .torsional import TorsionalModel
 from .modal import ModalModel
+from .multibody import MultibodyModel
 
 __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "OutputSpec",
            "SimulationDiverged", "KinematicModel", "MODEL_CLASSES", "model_class"]
@@ -13,6 +14,7 @@ __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "O
 MODEL_CLASSES: dict[int, type[Model]] = {0: KinematicModel}
 MODEL_CLASSES[1] = TorsionalModel
 MODEL_CLASSES[2] = ModalModel
+MODEL_CLASSES[3] = MultibodyModel
 
 
 def model_class(level: int) -> type[Model]:
