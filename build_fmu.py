@@ -129,6 +129,29 @@ def library_metadata() -> dict:
             "parameters": {p.name: p for p in P.PARAMETERS}}
 
 
+def absolute_self_references(package: Path) -> list[str]:
+    """Places where the package names itself absolutely ('from chainmodel.x import', or
+    resources.files / import_module with 'chainmodel...'). Inside the FMU the vendored copy has
+    a private name, so such a reference reaches the host's chainmodel (or fails) instead."""
+    import ast
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        tree = ast.parse(path.read_text(), str(path))
+        for node in ast.walk(tree):
+            name = None
+            if isinstance(node, ast.ImportFrom) and node.level == 0:
+                name = node.module
+            elif isinstance(node, ast.Import):
+                name = next((a.name for a in node.names if a.name.split(".")[0] == "chainmodel"), None)
+            elif (isinstance(node, ast.Call) and node.args
+                  and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)
+                  and getattr(node.func, "attr", getattr(node.func, "id", "")) in ("files", "import_module")):
+                name = node.args[0].value
+            if name and name.split(".")[0] == "chainmodel":
+                found.append(f"{path.relative_to(package.parent)}:{node.lineno} ({name})")
+    return found
+
+
 # --- modelDescription.xml --------------------------------------------------------------------
 
 def complete_model_description(xml: bytes, meta: dict) -> bytes:
@@ -319,6 +342,11 @@ def build(out: Path = DEFAULT_OUT, quiet: bool = False) -> Path:
         shutil.copytree(HERE / "chainmodel", vendor / "chainmodel",
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
         stage_documentation(tmp / "documentation")
+        refs = absolute_self_references(vendor / "chainmodel")
+        if refs and not quiet:
+            print("note: absolute self-references in chainmodel; inside the FMU they do not reach "
+                  "its own copy (use relative imports / __package__):\n  " + "\n  ".join(refs),
+                  file=sys.stderr)
         raw = FmuBuilder.build_FMU(ADAPTER, dest=tmp / "raw", project_files=[vendor],
                                    documentation_folder=tmp / "documentation",
                                    canGetAndSetFMUstate=True, canSerializeFMUstate=True)
