@@ -73,6 +73,7 @@ class TorsionalModel(Model):
     level: ClassVar[int] = 1
     name: ClassVar[str] = "torsional"
     preferred_method: ClassVar[str] = "rk4"
+    second_order: ClassVar[bool] = True
     n_modes: int = 0
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
@@ -346,8 +347,14 @@ class TorsionalModel(Model):
         return d
 
     def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
-        return float(quasi_static_extras(self.drive, self.params, tight, 0.0,
-                                         tight_length)["tight_span.midspan_deflection"])
+        """Scalar form of :func:`~chainmodel.models.base.quasi_static_extras`' sag (the numpy
+        version costs more than a whole compiled communication step)."""
+        p = self.params
+        rho = p["chain.link_mass"] / self.drive.pitch
+        g_n = p["gravity"] * math.cos(p["drive.inclination"])
+        if tight > 0.0:
+            return -min(rho * g_n * tight_length ** 2 / (8.0 * tight), tight_length / 2)
+        return -tight_length / 2
 
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
         x = np.asarray(x, float)
