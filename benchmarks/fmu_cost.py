@@ -149,7 +149,13 @@ def machine() -> str:
 
 
 def section(res: dict) -> str:
-    us = lambda s: f"{s * 1e6:,.0f} µs"
+    def us(s):
+        return f"{s * 1e6:,.0f} µs"
+
+    def spread(key):
+        v = res["all"][key]
+        return f"{us(min(v))} - {us(max(v))}"
+
     cd, bare, lib = res["chaindrive_level0_s"], res["bare_s"], res["library_level0_s"]
     import fmpy
     import pythonfmu
@@ -161,12 +167,12 @@ next to a bare pythonfmu FMU with the same 3 inputs and 14 outputs that does not
 set the 3 inputs, `fmi2DoStep`, get the 14 outputs. Scene: xu2010 (seed 003 drive, ramp to
 120 rpm, 43.2 N.m), h = {res['h']:g} s, median of {res['repeats']} blocks of {res['steps']} steps.
 
-| what | per communication step |
-|---|---|
-| bare pythonfmu FMU through fmpy (floor) | {us(bare)} |
-| ChainDrive FMU, fidelity 0, through fmpy | {us(cd)} |
-| library `Stepper.advance`, fidelity 0, same inputs | {us(lib)} |
-| adapter overhead (ChainDrive - bare - library) | {us(cd - bare - lib)} |
+| what | per communication step (median) | range over blocks |
+|---|---:|---:|
+| bare pythonfmu FMU through fmpy (floor) | {us(bare)} | {spread("bare")} |
+| ChainDrive FMU, fidelity 0, through fmpy | {us(cd)} | {spread("chaindrive")} |
+| library `Stepper.advance`, fidelity 0, same inputs | {us(lib)} | {spread("library")} |
+| adapter overhead (ChainDrive - bare - library) | {us(cd - bare - lib)} | |
 
 At fidelity 0 the step is the kinematic evaluation (one scalar call of the vectorised exact
 kinematics); the FMU adds the pythonfmu floor and its own plumbing on top. Levels 1-3 pay their
