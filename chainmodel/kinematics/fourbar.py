@@ -41,11 +41,10 @@ def solve_trig(a, b, c, near=math.pi / 2):
                          "(the span cannot reach between the sprockets)")
     delta = np.arctan2(b, a)
     spread = np.arccos(np.clip(ratio, -1.0, 1.0))
-    roots = np.stack([delta + spread, delta - spread])
-    # bring each root to within pi of `near`, then pick the closer one
-    roots = near + np.mod(roots - near + np.pi, 2 * np.pi) - np.pi
-    pick = np.argmin(np.abs(roots - near), axis=0)
-    out = np.take_along_axis(roots, pick[None, ...], axis=0)[0]
+    # bring each root to within pi of `near`, then pick the closer one (the first on a tie)
+    plus = near + np.mod(delta + spread - near + np.pi, 2 * np.pi) - np.pi
+    minus = near + np.mod(delta - spread - near + np.pi, 2 * np.pi) - np.pi
+    out = np.where(np.abs(minus - near) < np.abs(plus - near), minus, plus)
     return out if out.ndim else float(out)
 
 
@@ -140,20 +139,25 @@ class FourBar:
 
     # --- input-output ---------------------------------------------------------------------
 
-    def driven_angle(self, theta4, span_length):
-        """theta2 for given theta4 and span length r3 (seed 000 eqs 27-28)."""
+    def driven_angle(self, theta4, span_length, cos4=None, sin4=None):
+        """theta2 for given theta4 and span length r3 (seed 000 eqs 27-28).
+        ``cos4``, ``sin4``: cos and sin of theta4 when the caller has them already."""
         r1, r2, r4, t1 = self.r1, self.r2, self.r4, self.theta1
         theta4 = np.asarray(theta4, float)
-        a = -2 * r1 * r2 * math.cos(t1) - 2 * r4 * r2 * np.cos(theta4)
-        b = -2 * r1 * r2 * math.sin(t1) - 2 * r4 * r2 * np.sin(theta4)
+        cos4 = np.cos(theta4) if cos4 is None else cos4
+        sin4 = np.sin(theta4) if sin4 is None else sin4
+        a = -2 * r1 * r2 * math.cos(t1) - 2 * r4 * r2 * cos4
+        b = -2 * r1 * r2 * math.sin(t1) - 2 * r4 * r2 * sin4
         c = r1**2 + r4**2 + r2**2 - np.asarray(span_length) ** 2 + 2 * r1 * r4 * np.cos(t1 - theta4)
         return solve_trig(a, b, c)
 
-    def span_angle(self, theta2, theta4):
+    def span_angle(self, theta2, theta4, cos4=None, sin4=None):
         """theta3, direction of A1 -> B1 (seed 000 eq 29, with atan2)."""
         r1, r2, r4, t1 = self.r1, self.r2, self.r4, self.theta1
-        return np.arctan2(r1 * math.sin(t1) + r4 * np.sin(theta4) - r2 * np.sin(theta2),
-                          r1 * math.cos(t1) + r4 * np.cos(theta4) - r2 * np.cos(theta2))
+        cos4 = np.cos(theta4) if cos4 is None else cos4
+        sin4 = np.sin(theta4) if sin4 is None else sin4
+        return np.arctan2(r1 * math.sin(t1) + r4 * sin4 - r2 * np.sin(theta2),
+                          r1 * math.cos(t1) + r4 * cos4 - r2 * np.cos(theta2))
 
 
 def _consistent(fb: FourBar) -> tuple[Configuration, Configuration] | None:
@@ -252,12 +256,15 @@ def exact(drive: Drive, theta4, omega4=1.0, alpha4=0.0) -> Kinematics:
     period. ``omega4`` and ``alpha4`` (scalars or arrays broadcasting against ``theta4``) are the
     driver's d(theta4)/dt and d^2(theta4)/dt^2; the driver may accelerate.
     """
-    fb, _, _ = _events(drive)
+    fb, _, rel = _events(drive)
     t4 = in_period(drive, theta4)
-    h = step_h(drive, t4)
+    # h of step_h, from t4 itself: mapping t4 into the period a second time can move a sample
+    # at the period's end (just before seating) by an ulp onto theta4s, pairing it with h = 0
+    h = (t4 < rel.theta4 - _EVENT_TOL).astype(np.int8)
     r3 = fb.L + h * fb.pitch                                                     # eq 13
-    t2 = fb.driven_angle(t4, r3)                                                 # eqs 27-28
-    t3 = fb.span_angle(t2, t4)                                                   # eq 29
+    cos4, sin4 = np.cos(t4), np.sin(t4)
+    t2 = fb.driven_angle(t4, r3, cos4, sin4)                                     # eqs 27-28
+    t3 = fb.span_angle(t2, t4, cos4, sin4)                                       # eq 29
     r2, r4 = fb.r2, fb.r4
     s23 = np.sin(t2 - t3)
     ratio = r4 * np.sin(t4 - t3) / (r2 * s23)                                    # eq 30

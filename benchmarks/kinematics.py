@@ -1,0 +1,228 @@
+"""Throughput of the kinematics library on one core: driver angles per second, vectorised.
+
+    python benchmarks/kinematics.py                # measure and print the table
+    python benchmarks/kinematics.py --write-doc    # ... and rewrite "## Kinematics" in docs/performance.md
+    python benchmarks/kinematics.py --quick        # smaller batches and fewer repeats (a smoke run)
+
+For the coarse, medium and fine drives of seed 000 Table 1 and batches of 1e4, 1e5 and 1e6
+driver angles (spread over many tooth periods, so both span lengths occur), it times
+
+* ``kinematics.exact``           the four-bar: theta2, theta3, span length, omega2/3, alpha2
+                                 (seed 000 eqs 26-32) - the DESIGN target is >= 1e6 angles/s;
+* ``kinematics.driven_rotation`` the same plus the continuous forward-positive rotations;
+* ``kinematics.approximate``     the closed forms (eqs 50-53);
+* ``kinematics.wrap_length``     both spans and the total wrapping length (seed 004 eq 13).
+
+The process is pinned to one CPU and BLAS/OpenMP threads are limited to one before numpy is
+imported; each entry is the best of several repeats after a warm-up call (the seating and
+release events are computed once per drive and cached).
+
+The FMU's cost per communication step is a separate measurement (benchmarks/fmu_cost.py);
+:func:`fmu_step_cost` below is the hook where that measurement plugs into this table.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import datetime  # noqa: E402
+import math  # noqa: E402
+import platform  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import chainmodel  # noqa: E402
+from chainmodel import kinematics as K  # noqa: E402
+
+DOC = ROOT / "docs" / "performance.md"
+SECTION = "## Kinematics"
+COMMAND = "python benchmarks/kinematics.py --write-doc"
+DRIVES = ("coarse", "medium", "fine")
+BATCHES = (10_000, 100_000, 1_000_000)
+TARGET = 1e6  # driver angles per second, DESIGN.md / issue 2
+
+
+def _pin_one_core() -> str:
+    try:
+        cpu = min(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cpu})
+        return f"pinned to CPU {cpu}"
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return "not pinned (no sched_setaffinity)"
+
+
+def _best_time(fn, repeats: int, budget: float) -> float:
+    """Best wall time of ``fn()`` over ``repeats`` calls (fewer if ``budget`` s runs out)."""
+    fn()  # warm-up
+    best = math.inf
+    start = time.perf_counter()
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+        if time.perf_counter() - start > budget:
+            break
+    return best
+
+
+def measure(drives=DRIVES, batches=BATCHES, repeats: int = 7, budget: float = 3.0):
+    """{(function, drive, batch): driver angles per second}."""
+    rng = np.random.default_rng(0)
+    rates = {}
+    for name in drives:
+        d = chainmodel.preset(name)
+        s = K.seating(d)
+        P = 2 * math.pi / d.n_driver
+        for n in batches:
+            phi = rng.uniform(0.0, 50 * P, n)          # driver rotations over 50 tooth periods
+            theta4 = s.theta4 - phi                    # the same angles as contact angles
+            w = np.full(n, 10.47)
+            a = np.full(n, 5.0)
+            cases = {
+                "exact": lambda: K.exact(d, theta4, -w, -a),
+                "driven_rotation": lambda: K.driven_rotation(d, phi, w, a),
+                "approximate": lambda: K.approximate(d, theta4, -w, -a),
+                "wrap_length": lambda: K.wrap_length(d, phi),
+            }
+            for fn_name, fn in cases.items():
+                if fn_name == "wrap_length" and n > 100_000:
+                    continue   # memory-heavy; 1e5 shows its rate
+                rates[(fn_name, name, n)] = n / _best_time(fn, repeats, budget)
+    return rates
+
+
+def fmu_step_cost():
+    """Hook for the FMU helper: cost per communication step of the level-0 FMU through fmpy,
+    next to a bare pythonfmu FMU, measured in the same run.
+
+    Return a dict such as ``{"chaindrive_us": ..., "bare_us": ..., "library_us": ...}``, or
+    None when not measured. The measurement is benchmarks/fmu_cost.py's (it builds both FMUs
+    in a temporary directory); None, with the reason on stderr, if it cannot run."""
+    try:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from fmu_cost import fmu_step_cost as measure
+        res = measure(steps=500, repeats=3)
+    except Exception as exc:  # the FMU toolchain is optional for this benchmark
+        print(f"FMU step cost not measured: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return None
+    return {"chaindrive_us": round(res["chaindrive_level0_s"] * 1e6, 1),
+            "bare_us": round(res["bare_s"] * 1e6, 1),
+            "library_us": round(res["library_level0_s"] * 1e6, 1)}
+
+
+# --- reporting --------------------------------------------------------------------------------
+
+def _cpu_model() -> str:
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name"):
+                return line.split(":", 1)[1].strip()
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def table(rates, drives=DRIVES, batches=BATCHES) -> str:
+    fns = []
+    for key in rates:
+        if key[0] not in fns:
+            fns.append(key[0])
+    head = "| function | drive | " + " | ".join(f"{n:.0e} angles" for n in batches) + " |"
+    lines = [head, "|---|---|" + "---:|" * len(batches)]
+    for fn in fns:
+        for name in drives:
+            cells = []
+            for n in batches:
+                r = rates.get((fn, name, n))
+                cells.append("-" if r is None else f"{r / 1e6:.2f} M/s")
+            lines.append(f"| `{fn}` | {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def section_text(rates, pin: str, fmu=None) -> str:
+    exact = [r for (fn, _, _), r in rates.items() if fn == "exact"]
+    verdict = ("meets" if min(exact) >= TARGET else "MISSES")
+    machine = f"{_cpu_model()}, {os.cpu_count()} cores ({pin})"
+    text = [
+        SECTION,
+        "",
+        "Driver angles per second through the kinematics library on one core, vectorised over",
+        "the angles (best of several repeats; the seating/release events are cached per drive).",
+        f"`kinematics.exact` {verdict} the target of 1e6 angles/s at every batch size: slowest "
+        f"{min(exact) / 1e6:.2f} M/s, fastest {max(exact) / 1e6:.2f} M/s.",
+        "",
+        f"Command: `{COMMAND}`  ",
+        f"Machine: {machine}; Python {platform.python_version()}, numpy {np.__version__}  ",
+        f"Date: {datetime.date.today().isoformat()}",
+        "",
+        table(rates),
+        "",
+        "`exact` is seed 000 eqs 26-32 (theta2, theta3, span length, velocity ratio, omega2,",
+        "omega3, alpha2); `driven_rotation` adds the continuous forward-positive rotations;",
+        "`approximate` the closed forms of eqs 50-53 (with h from the exact events);",
+        "`wrap_length` both spans and seed 004 eq 13 (measured up to 1e5 angles). Other",
+        "processes shared the machine during the run, so rates can vary by tens of percent",
+        "between runs.",
+    ]
+    if fmu:
+        text += ["", f"FMU step cost (from `fmu_step_cost()`): {fmu}"]
+    return "\n".join(text) + "\n"
+
+
+def write_section(text: str, path: Path = DOC) -> None:
+    """Replace (or append) the '## Kinematics' section of docs/performance.md, leaving the
+    other sections as they are."""
+    old = path.read_text() if path.exists() else "# Performance\n"
+    lines = old.splitlines(keepends=True)
+    start = next((i for i, ln in enumerate(lines) if ln.rstrip() == SECTION), None)
+    if start is None:
+        new = old.rstrip("\n") + "\n\n" + text
+    else:
+        end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")),
+                   len(lines))
+        new = "".join(lines[:start]) + text + ("\n" if end < len(lines) else "") + "".join(lines[end:])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(new)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--write-doc", action="store_true",
+                    help=f"rewrite the '{SECTION}' section of docs/performance.md")
+    ap.add_argument("--quick", action="store_true", help="small batches, few repeats")
+    args = ap.parse_args(argv)
+    pin = _pin_one_core()
+    batches = (10_000, 100_000) if args.quick else BATCHES
+    rates = measure(batches=batches, repeats=3 if args.quick else 7,
+                    budget=0.5 if args.quick else 3.0)
+    print(f"kinematics throughput, one core ({pin}), driver angles per second")
+    print(table(rates, batches=batches))
+    exact = [r for (fn, _, _), r in rates.items() if fn == "exact"]
+    print(f"exact: min {min(exact):.3g}/s, target {TARGET:.0e}/s: "
+          f"{'met' if min(exact) >= TARGET else 'NOT met'}")
+    fmu = fmu_step_cost()
+    print("FMU step cost: " + ("not measured here (benchmarks/fmu_cost.py)" if fmu is None
+                                else str(fmu)))
+    if args.write_doc:
+        if args.quick:
+            print("--write-doc ignored with --quick", file=sys.stderr)
+        else:
+            write_section(section_text(rates, pin, fmu))
+            print(f"wrote {SECTION!r} in {DOC.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
