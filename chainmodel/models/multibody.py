@@ -46,8 +46,10 @@ from .base import Inputs, Model, SimulationDiverged
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 
-#: a roller closer than clearance + this fraction of the pitch to a seat centre is "engaged"
-ENGAGED_TOLERANCE = 0.05
+#: a roller is "engaged" (seated) on a sprocket while it lies within the clearance (plus this
+#: fraction of the pitch) of a seat centre, or touches a seat no farther out than the pitch
+#: circle plus the clearance
+ENGAGED_TOLERANCE = 0.002
 #: the driver is "at rest" below this speed [rad/s]; velocity_ratio is then the geometric one
 REST_SPEED = 1e-3
 #: communication steps are split into chunks of at most this many fixed steps for the compiled
@@ -360,8 +362,12 @@ class MultibodyModel(Model):
         d["contact.max_force"] = "largest roller-seat normal contact force"
         return d
 
-    def _engaged(self):
-        return self.ws.dist <= self._engaged_tol
+    def _engaged(self, x):
+        """(2, M) bool: roller seated on the driver / driven sprocket (within the clearance of a
+        seat centre, or touching a seat within the pitch radius plus the clearance; a roller
+        riding a flank farther out is entering or leaving)."""
+        return K.engaged_numpy(np.asarray(x[:2 + 2 * self.M]), self.ws.dist, self.ws.side,
+                               self.ws.seat_angle, self._engaged_tol, self.P)
 
     def _evaluate(self, t, x, u):
         """Forces at (t, x, u) and the spans: ((mid link, start roller, end roller) of the upper
@@ -370,9 +376,11 @@ class MultibodyModel(Model):
         acc, status, shaft = self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
         spans = self._spans_out
         if self.use_numba:
-            K.spans_numba(x[:n], self.ws.dist, self._engaged_tol, self._mids, spans)
+            K.spans_numba(x[:n], self.ws.dist, self.ws.side, self.ws.seat_angle,
+                          self._engaged_tol, self.P, self._mids, spans)
         else:
-            K.spans_numpy(x[:n], self.ws.dist, self._engaged_tol, self._mids, spans)
+            K.spans_numpy(x[:n], self.ws.dist, self.ws.side, self.ws.seat_angle,
+                          self._engaged_tol, self.P, self._mids, spans)
         z = x[2:n].reshape(self.M, 2)
         return acc, shaft, z, tuple(int(i) for i in spans[0]), tuple(int(i) for i in spans[1])
 
@@ -443,7 +451,7 @@ class MultibodyModel(Model):
         roller indices), seat_positions_driver (z1, 2), seat_positions_driven (z2, 2)."""
         acc, shaft, z, up, low = self._evaluate(t, x, u)
         d = self.drive
-        engaged = self._engaged()
+        engaged = self._engaged(x)
         tight = low if u.speed < 0 else up
         seats = []
         for s, (teeth, R, cen) in enumerate(((d.n_driver, d.driver.pitch_radius, self._centres[0]),

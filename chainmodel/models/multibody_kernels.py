@@ -360,10 +360,30 @@ def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
     return -1
 
 
-def _spans_loops(q, dist, tol, mids, out):
+def _engaged_loops(q, dist, side, seat_angle, tol, P, s, r):
+    """Roller r is engaged (seated) on sprocket s: within tol of a seat centre (tol = clearance
+    plus a little), or touching a seat of s while no farther from the sprocket centre than the
+    pitch radius plus the clearance (eq 9's second condition with the clearance added); a
+    roller riding a flank beyond that is entering or leaving."""
+    if dist[s, r] <= tol:
+        return True
+    if side[r] != s + 1:
+        return False
+    if s == 0:
+        dx = q[2 + 2 * r] - P[I_CX]
+        dy = q[3 + 2 * r] - P[I_CY]
+        R = P[I_R1] + P[I_DR]
+    else:
+        dx = q[2 + 2 * r]
+        dy = q[3 + 2 * r]
+        R = P[I_R2] + P[I_DR]
+    return dx * dx + dy * dy <= R * R
+
+
+def _spans_loops(q, dist, side, seat_angle, tol, P, mids, out):
     """Span bookkeeping of the outputs: for span s (0 upper: driven -> driver, 1 lower: driver
-    -> driven) the link whose midpoint is nearest mids[s], the last roller engaged (distance to
-    a seat centre <= tol) on the sprocket it leaves, going back from that link, and the first
+    -> driven) the link whose midpoint is nearest mids[s], the last roller engaged
+    (:func:`_engaged_loops`) on the sprocket it leaves, going back from that link, and the first
     engaged on the sprocket it runs onto, going forward. out[s] = (mid, start, end)."""
     M = (q.shape[0] - 2) // 2
     for span in range(2):
@@ -386,13 +406,13 @@ def _spans_loops(q, dist, tol, mids, out):
         a = (mid + 1) % M
         for k in range(M):
             r = (mid - k) % M
-            if dist[s_from, r] <= tol:
+            if _ENGAGED(q, dist, side, seat_angle, tol, P, s_from, r):
                 a = r
                 break
         b = mid
         for k in range(M):
             r = (mid + 1 + k) % M
-            if dist[s_to, r] <= tol:
+            if _ENGAGED(q, dist, side, seat_angle, tol, P, s_to, r):
                 b = r
                 break
         out[span, 0] = mid
@@ -400,17 +420,29 @@ def _spans_loops(q, dist, tol, mids, out):
         out[span, 2] = b
 
 
-def spans_numpy(q, dist, tol, mids, out):
+def engaged_numpy(q, dist, side, seat_angle, tol, P):
+    """(2, M) bool: :func:`_engaged_loops` for every roller and both sprockets."""
+    M = (q.shape[0] - 2) // 2
+    z = q[2:].reshape(M, 2)
+    r2 = np.stack([(z[:, 0] - P[I_CX]) ** 2 + (z[:, 1] - P[I_CY]) ** 2,
+                   z[:, 0] ** 2 + z[:, 1] ** 2])
+    R = np.array([P[I_R1], P[I_R2]])[:, None] + P[I_DR]
+    touch = side[None, :] == np.array([[1], [2]])
+    return (dist <= tol) | (touch & (r2 <= R * R))
+
+
+def spans_numpy(q, dist, side, seat_angle, tol, P, mids, out):
     """Vectorised :func:`_spans_loops`."""
     M = (q.shape[0] - 2) // 2
     z = q[2:].reshape(M, 2)
+    eng = engaged_numpy(q, dist, side, seat_angle, tol, P)
     mp = 0.5 * (z + np.roll(z, -1, axis=0))
     for span in range(2):
         mid = int(np.argmin((mp[:, 0] - mids[span, 0]) ** 2 + (mp[:, 1] - mids[span, 1]) ** 2))
         s_from = 1 if span == 0 else 0
         back = (mid - np.arange(M)) % M
         fwd = (mid + 1 + np.arange(M)) % M
-        eb, ef = dist[s_from][back] <= tol, dist[1 - s_from][fwd] <= tol
+        eb, ef = eng[s_from][back], eng[1 - s_from][fwd]
         out[span] = (mid, back[np.argmax(eb)] if eb.any() else (mid + 1) % M,
                      fwd[np.argmax(ef)] if ef.any() else mid)
 
@@ -431,7 +463,7 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     v = x[n:]
     status, shaft = _ACCEL(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist,
                            seat_angle)
-    _SPANS(q, dist, tol, mids, spans)
+    _SPANS(q, dist, side, seat_angle, tol, P, mids, spans)
     rigid = P[I_RIGID] != 0.0
     phi1 = tau if rigid else q[0]
     w1 = tau_d if rigid else v[0]
@@ -491,11 +523,12 @@ if HAVE_NUMBA:  # pragma: no branch
     _ACCEL = _numba.njit(cache=True)(_accel_loops)
     _HERMITE = _numba.njit(cache=True)(_hermite)
     _run_fixed_jit = _numba.njit(cache=True)(_run_fixed_loops)
+    _ENGAGED = _numba.njit(cache=True)(_engaged_loops)
     _SPANS = _numba.njit(cache=True)(_spans_loops)
     _outputs_jit = _numba.njit(cache=True)(_outputs_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
-    _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit = (
-        _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops)
+    _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit, _ENGAGED = (
+        _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops, _engaged_loops)
 spans_numba = _SPANS
 _accel_jit = _ACCEL
 
