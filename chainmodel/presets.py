@@ -25,7 +25,8 @@ INCH = 0.0254
 
 
 def _read(name: str) -> list[dict[str, str]]:
-    text = resources.files("chainmodel.data").joinpath(name).read_text()
+    # relative to this package, so a vendored copy (inside the FMU) reads its own data
+    text = resources.files(__package__).joinpath("data", name).read_text()
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
     return list(csv.DictReader(lines))
 
