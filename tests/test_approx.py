@@ -9,7 +9,7 @@ import pytest
 import chainmodel
 from chainmodel import kinematics as K
 from chainmodel.geometry import Drive
-from chainmodel.kinematics import approx as A
+from chainmodel.kinematics import errors as E
 
 INCH = 0.0254
 PAPER = ("coarse", "medium", "fine")
@@ -209,7 +209,7 @@ def test_approximate_refuses_unknown_options(kw, match):
 
 # n = n_c = n_o and N cover 13..40 with both ends and the small values (where the errors are
 # largest) densely; f covers 0.1..0.9 in steps of 0.1. The full 28 x 28 x 9 grid
-# (python -m chainmodel.kinematics.approx) gives the same maxima, at (n, N) = (13, 13).
+# (python -m chainmodel.kinematics.errors) gives the same maxima, at (n, N) = (13, 13).
 TEETH = (13, 14, 15, 17, 20, 25, 32, 40)
 SPANS = (13, 14, 15, 17, 20, 25, 32, 40)
 FRACS = tuple(np.round(np.arange(0.1, 0.91, 0.1), 2))
@@ -217,7 +217,7 @@ FRACS = tuple(np.round(np.arange(0.1, 0.91, 0.1), 2))
 
 @pytest.fixture(scope="module")
 def section_4_4():
-    return A.nrmsd_table(TEETH, SPANS, FRACS, samples=200)
+    return E.nrmsd_table(TEETH, SPANS, FRACS, samples=200)
 
 
 def test_section_4_4_bounds(section_4_4):
@@ -243,7 +243,7 @@ def test_bounds_need_more_than_twelve_teeth_and_pitches():
     """Below n, N = 13 the corrected velocity and the acceleration leave their bounds
     (seeds README: the Taylor form meets 0.1 % 'for n, N > 12'; paper: acceleration < 10 %
     'for n, N > 12')."""
-    w = A.nrmsd_table((10,), (10,), (0.5, 0.9), samples=200)
+    w = E.nrmsd_table((10,), (10,), (0.5, 0.9), samples=200)
     assert w["velocity_corrected"][0] > 0.001
     assert w["acceleration"][0] > 0.10
     assert w["position"][0] < 0.005

@@ -35,8 +35,7 @@ from .fourbar import Configuration, Kinematics
 
 __all__ = ["approximate_seating", "approximate_release", "approximate_phase", "exact_phase",
            "approximate_driven_angle", "approximate_velocity_ratio", "approximate_span_speed",
-           "approximate_acceleration", "approximate", "nrmsd", "VELOCITY_FORMS",
-           "nrmsd_table"]
+           "approximate_acceleration", "approximate", "nrmsd", "VELOCITY_FORMS"]
 
 VELOCITY_FORMS = ("corrected", "printed")
 
@@ -215,72 +214,3 @@ def nrmsd(approx, exact) -> float:
     if den == 0.0:
         raise ValueError("nrmsd is undefined when every exact value is zero")
     return math.sqrt(float(np.mean((a - x) ** 2))) / den
-
-
-def nrmsd_table(teeth, spans, fractions, samples: int = 200, pitch: float = 0.0254,
-                omega4: float = -100 * 2 * math.pi / 60) -> dict[str, float]:
-    """Largest NRMSD (eq 54) of position, velocity (both eq 51 forms) and acceleration over
-    drives with n_c = n_o = n for n in ``teeth``, N in ``spans``, f in ``fractions`` (seed 000
-    section 4.4), with ``samples`` driver angles per tooth period at constant driver speed
-    ``omega4`` (paper: 100 rpm, clockwise). Returns {quantity: (max, (n, N, f))} and, under
-    "skipped", the (n, N) pairs whose pitch circles overlap (Drive refuses them)."""
-    worst = {key: (-1.0, None) for key in ("position", "velocity_printed", "velocity_corrected",
-                                           "acceleration")}
-    skipped = []
-    for n in teeth:
-        for N in spans:
-            for f in fractions:
-                try:
-                    d = Drive(int(n), int(n), pitch, int(N), float(f))
-                except ValueError:
-                    if (int(n), int(N)) not in skipped:
-                        skipped.append((int(n), int(N)))
-                    continue
-                s = fb.seating(d)
-                t4 = s.theta4 - np.arange(samples) * (2 * math.pi / n / samples)
-                ex = fb.exact(d, t4, omega4=omega4)
-                ap = approximate(d, t4, omega4=omega4, form="corrected")
-                ap_p = approximate_velocity_ratio(d, ap.theta2, ap.theta4, "printed") * omega4
-                errs = {"position": nrmsd(ap.theta2, ex.theta2),
-                        "velocity_printed": nrmsd(ap_p, ex.omega2),
-                        "velocity_corrected": nrmsd(ap.omega2, ex.omega2),
-                        "acceleration": nrmsd(ap.alpha2, ex.alpha2)}
-                for key, e in errs.items():
-                    if e > worst[key][0]:
-                        worst[key] = (e, (int(n), int(N), float(f)))
-    worst["skipped"] = skipped
-    return worst
-
-
-def _main(argv=None) -> int:  # pragma: no cover - exercised by hand, documented in docs
-    import argparse
-    ap = argparse.ArgumentParser(
-        prog="python -m chainmodel.kinematics.approx",
-        description="Largest NRMSD (seed 000 eq 54) of the closed-form approximations over "
-                    "n = n_c = n_o, N and f (seed 000 section 4.4).")
-    ap.add_argument("--teeth", default="13:40", help="n range lo:hi inclusive (default 13:40)")
-    ap.add_argument("--spans", default="13:40", help="N range lo:hi inclusive (default 13:40)")
-    ap.add_argument("--fractions", default="0.1:0.9:0.1", help="f lo:hi:step (default 0.1:0.9:0.1)")
-    ap.add_argument("--samples", type=int, default=200, help="driver angles per tooth period")
-    args = ap.parse_args(argv)
-
-    def irange(text):
-        lo, hi = (int(v) for v in text.split(":"))
-        return range(lo, hi + 1)
-
-    lo, hi, step = (float(v) for v in args.fractions.split(":"))
-    fr = np.round(np.arange(lo, hi + step / 2, step), 10)
-    worst = nrmsd_table(irange(args.teeth), irange(args.spans), fr, samples=args.samples)
-    print(f"n = n_c = n_o in {args.teeth}, N in {args.spans}, f in {args.fractions}, "
-          f"{args.samples} samples per tooth period, 100 rpm")
-    print(f"{'quantity':<22}{'max NRMSD':>12}   at (n, N, f)")
-    skipped = worst.pop("skipped")
-    for key, (e, where) in worst.items():
-        print(f"{key:<22}{100 * e:>11.4f}%   {where}")
-    if skipped:
-        print(f"skipped {len(skipped)} (n, N) pairs whose pitch circles overlap: {skipped}")
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(_main())
