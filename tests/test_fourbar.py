@@ -234,3 +234,18 @@ def test_equal_sprockets_f0_constant_ratio_one(n, N):
     d = Drive(n, n, INCH, N, 0.5)
     k = K.exact(d, t4, -10.47)
     assert np.ptp(k.velocity_ratio) > 1e-6
+
+
+def test_velocity_ratio_ripple_decimal_per_drive():
+    """Seed 000 section 4.2 (Fig. 4 d-f): "For the coarse, medium and fine configurations the
+    variation of the velocity ratio is seen to be on the first, second and third decimal
+    point, respectively" (largest peak-to-peak over f = 0, 0.5, 0.75); and f = 0 varies less
+    than f = 0.5 (Bartlett, Morrison: minimum and maximum variation)."""
+    for name, decimal in (("coarse", 1), ("medium", 2), ("fine", 3)):
+        ripple = {}
+        for f in (0.0, 0.5, 0.75):
+            d = _drive(name, f)
+            t4 = K.seating(d).theta4 - np.linspace(0, 2 * math.pi / d.n_driver, 2000)
+            ripple[f] = np.ptp(K.exact(d, t4).velocity_ratio)
+        assert 10.0 ** -decimal <= max(ripple.values()) < 10.0 ** (1 - decimal), (name, ripple)
+        assert ripple[0.0] < ripple[0.5]
