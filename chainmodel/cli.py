@@ -53,6 +53,7 @@ from __future__ import annotations
 import argparse
 import csv
 import importlib
+import inspect
 import json
 import math
 import sys
@@ -339,10 +340,19 @@ def cmd_run(args) -> int:
     if fmu_arg is not None:
         path = _fmu_path(fmu_arg)
         try:
-            from .fmu import simulate_fmu
+            from . import fmu
         except ImportError as exc:
             raise CLIError(f"--via-fmu is not available: {exc}") from None
-        result = simulate_fmu(path, scene)
+        kw_fmu = ({"progress": progress}
+                  if "progress" in inspect.signature(fmu.simulate_fmu).parameters else {})
+        fmu_error = getattr(fmu, "FMUError", None)
+        try:
+            result = fmu.simulate_fmu(path, scene, **kw_fmu)
+        except Exception as exc:
+            if fmu_error is not None and isinstance(exc, fmu_error):
+                raise CLIError(f"the FMU {path} failed: {exc} (rebuild it with "
+                               "`python build_fmu.py`)") from None
+            raise
     else:
         n = len(scene.times())
         snapshot_every = max(1, math.ceil(n / 2000)) if args.plot and scene.fidelity >= 1 else 0

@@ -253,12 +253,18 @@ def plot_run(result, path: str | Path, summary: Mapping[str, Any] | None = None)
     ax.grid(alpha=0.3)
 
     ax = fig.add_subplot(grid[1, 1])
-    f_top = 0.0
+    f_top = f_peak = 0.0
     for label, colour, f, amp in spectra:
         if len(f):
             ax.plot(f, amp, lw=0.9, color=colour, label=label)
             f_top = max(f_top, float(f[-1]))
-    f_max = min(f_top, 6.5 * f_mesh) if math.isfinite(f_mesh) and f_mesh > 0 else f_top
+            if np.any(amp > 0):
+                f_peak = max(f_peak, float(f[int(np.argmax(amp))]))
+    # the first harmonics of the meshing frequency, and the largest peak wherever it is
+    # (a resonance above them, e.g. the driven sprocket's at level 1)
+    f_max = f_top
+    if math.isfinite(f_mesh) and f_mesh > 0:
+        f_max = min(f_top, max(6.5 * f_mesh, 1.25 * f_peak))
     _mark_meshing(ax, f_mesh, f_max)
     if f_max > 0:
         ax.set_xlim(0, f_max)
