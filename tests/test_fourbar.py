@@ -114,6 +114,14 @@ def test_where_f0_stops_being_simultaneous(n_c, n_o, N, simultaneous):
         # pitch longer, (N + 2) p, although f = 0
         assert phase < 1 - 1e-4
         assert lengths.tolist() == [N + 1, N + 2]
+        # a real rigid-chain state: between the endpoints the span-window geometry picks
+        # (checked against a convex hull in test_wrapping.py) it holds whole pitches
+        psi = s.theta4 - r.theta4
+        phi = np.concatenate([np.linspace(0, 2 * a_c, 501),
+                              psi + np.linspace(0, 2 * a_c - psi, 50, endpoint=False)[1:]])
+        g = K.chain_geometry(d, phi, K.driven_rotation(d, phi).driven_angle)
+        np.testing.assert_allclose(g.upper.length, g.upper_links * INCH, rtol=1e-12)
+        assert set(np.unique(g.upper_links)) == {N + 1, N + 2}
 
 
 def test_seeds_readme_extreme_example_cannot_be_built():
