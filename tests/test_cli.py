@@ -334,6 +334,26 @@ def test_plot_run_tracks_a_tight_span_roller(tmp_path):
     assert_png(tmp_path / "mb.png")
 
 
+def test_multibody_run_plots_snapshots(capsys, tmp_path):
+    """The multibody level's snapshots reach the figure: the CLI asks for them with --plot, the
+    tracked roller starts at the tight span's driven endpoint and the model numbers rollers like
+    the rigid layout (so the panel can show the deviation from it)."""
+    from chainmodel.models import MODEL_CLASSES
+    from chainmodel.plots import _snapshot_rollers, _tight_span_track
+    if 3 not in MODEL_CLASSES:
+        pytest.skip("the multibody level is not in this tree yet")
+    code, out, err = run_cli(capsys, "run", "xu2010", "--fidelity", "multibody", "--duration",
+                             0.08, "--quiet", "--plot", tmp_path / "mb.png")
+    assert code == 0, err
+    assert_png(tmp_path / "mb.png")
+    r = chainmodel.simulate("xu2010", fidelity=3, duration=0.08, snapshot_every=10)
+    snaps = _snapshot_rollers(r)
+    assert len(snaps) == len(r.snapshots) > 3
+    assert snaps[0][1].shape == (46, 2)
+    track = _tight_span_track(r.scene.drive, snaps, r, 0.05)
+    assert track is not None and track[3] is not None
+
+
 def test_plot_run_without_usable_snapshots(tmp_path):
     """Snapshots without an (M, 2) roller_positions array leave the snapshot panels out (no
     snapshots at all is the level-0 figure of test_run_table_csv_and_plot)."""
