@@ -19,8 +19,8 @@ Adding a subcommand
 -------------------
 The parser is built from :data:`SUBCOMMANDS`, a list of ``(module, function)`` pairs. Each
 function is called as ``function(subparsers)`` with the object ``add_subparsers`` returned and
-adds one or more subcommands. To add one, write in your module (say
-``chainmodel/analysis/perturbation.py``)::
+adds one or more subcommands. To add one, write in your module (say the package
+``chainmodel.analysis.perturbation``)::
 
     def register(subparsers):
         p = subparsers.add_parser("frequency-response", help="one line for `chainmodel --help`",
