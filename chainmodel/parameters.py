@@ -127,6 +127,11 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("chain.link_stiffness", 5.1e7, "N/m", "longitudinal stiffness of one link (seed 003)",
        minimum=0.0, exclusive_minimum=True),
     _p("chain.link_damping", 100.0, "N.s/m", "damping of one link (seed 003)", minimum=0.0),
+    _p("chain.joint_damping", 0.0, "N.m.s/rad",
+       "viscous damping of the relative rotation of neighbouring links at a joint (not in seed "
+       "003, hence 0; 0.02 gives xu2010's tight-span first transverse mode about 2 % damping; "
+       "frame-indifferent, so wrapped links turning with a sprocket do not dissipate)",
+       minimum=0.0, levels=(3,)),
     _p("chain.pretension", 0.0, "N",
        "extra static tension from a chain pre-strain: every link's free length is "
        "p - pretension / link_stiffness (adds to the tension the centre distance gives)",

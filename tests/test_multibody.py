@@ -4,7 +4,7 @@ spectrum, quasi-static limit, energy, bad input, numba vs numpy, stable step, Ja
 Reference numbers come from seed 003 section 7 (25/17 teeth, 46 links, 120 rpm, 43.2 N.m: the
 meshing frequency z1 n / 60 = 50 Hz), from physics (torque balances, energy conservation) or
 from independent computations in the tests (level 0's exact kinematics, chain_geometry's wrap,
-finite-difference Jacobians). Runs are kept short: one shared 1.3 s run of xu2010 serves the
+finite-difference Jacobians). Runs are kept short: one shared 1.35 s run of xu2010 serves the
 steady-state tests (two driver revolutions after 0.3 s of start-up), the others run 0.02-0.9 s.
 """
 
@@ -32,8 +32,8 @@ STEADY_FROM = 0.3  # s: after the 0.05 s ramp and the start-up transient of the 
 
 @pytest.fixture(scope="module")
 def xu_run():
-    """xu2010 (seed 003 section 7) for 1.3 s: two driver revolutions after STEADY_FROM."""
-    return chainmodel.simulate("xu2010", fidelity="multibody", duration=1.3,
+    """xu2010 (seed 003 section 7) for 1.35 s: two driver revolutions after STEADY_FROM."""
+    return chainmodel.simulate("xu2010", fidelity="multibody", duration=1.35,
                                output_interval=2e-4, snapshot_every=1)
 
 
@@ -149,6 +149,7 @@ def test_quasi_static_limit_follows_level_0():
 def _energy_model(**extra):
     params = load_scene("xu2010").parameters | {
         "fidelity": 3, "gravity": 0.0, "chain.link_damping": 0.0, "contact.damping": 0.0,
+        "chain.joint_damping": 0.0,
         "input_shaft.damping": 0.0, "driven.damping": 0.0} | extra
     drive = load_scene("xu2010").drive
     return MultibodyModel(drive, params)
@@ -303,7 +304,8 @@ def test_stable_step_bounds_the_highest_frequency():
     """omega_max (Gershgorin bound) is at least the largest natural frequency of the tangent
     stiffness, found from a finite-difference Jacobian's eigenvalues at a running state."""
     scene = load_scene("xu2010", fidelity=3).with_overrides(parameters={
-        "chain.link_damping": 0.0, "contact.damping": 0.0, "input_shaft.damping": 0.0})
+        "chain.link_damping": 0.0, "contact.damping": 0.0, "input_shaft.damping": 0.0,
+        "chain.joint_damping": 0.0})
     model, xs = _states(scene, 0.01)
     t, x = xs[-1]
     u = scene.inputs(t)

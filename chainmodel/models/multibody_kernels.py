@@ -28,12 +28,12 @@ PARAM_FIELDS = (
     "cx", "cy", "R1", "R2", "phase1", "phase2", "pitch_angle1", "pitch_angle2",
     "sin_gamma1", "cos_gamma1", "sin_gamma2", "cos_gamma2", "tip1", "tip2", "paper_contact",
     "paper_damping", "q_forces", "rigid_shaft", "l_min", "l_max", "z1", "z2", "reach1",
-    "reach2",
+    "reach2", "cj",
 )
 (I_M, I_K, I_C, I_L0, I_KC, I_CC, I_DR, I_GX, I_GY, I_I1, I_I2, I_KR, I_CR, I_C2,
  I_CX, I_CY, I_R1, I_R2, I_PH1, I_PH2, I_TA1, I_TA2, I_SG1, I_CG1, I_SG2, I_CG2, I_TIP1, I_TIP2,
  I_PAPER_CONTACT, I_PAPER_DAMP, I_QF, I_RIGID, I_LMIN, I_LMAX, I_Z1, I_Z2, I_REACH1,
- I_REACH2) = range(len(PARAM_FIELDS))
+ I_REACH2, I_CJ) = range(len(PARAM_FIELDS))
 #: P holds these scalars, then the tables cos(2 pi j / z1), sin(...) (j < z1), then the same
 #: for z2 (see :func:`pack_tables`): seat directions without trigonometry in the hot loop
 N_PARAMS = len(PARAM_FIELDS)
@@ -61,7 +61,8 @@ def numba_enabled() -> bool:
 
 # --- explicit-loop kernel (compiled by numba) -------------------------------------------------
 
-def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist, seat_angle):
+def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist, seat_angle,
+                 scr):
     """Accelerations ``a`` (same layout as q) and diagnostics; returns (status, shaft torque).
 
     status 0: fine; 1: a link is stretched or compressed beyond [l_min, l_max] or a
@@ -70,6 +71,7 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
     fcon[i]: normal contact force on roller i; side[i]: 0 free, 1 driver, 2 driven.
     dist[s, i]: distance of roller i from the nearest seat centre of sprocket s.
     seat_angle[s, i]: angle of that seat about the sprocket centre.
+    scr[i]: scratch (the angular velocity of link i).
     """
     n = q.shape[0]
     M = (n - 2) // 2
@@ -127,6 +129,29 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
         a[3 + 2 * i] += fy
         a[2 + 2 * j] -= fx
         a[3 + 2 * j] -= fy
+        scr[i] = (dx * dvy - dy * dvx) / (L * L)
+    # joint dampers: S = cj/2 sum (w_i - w_{i-1})^2 over the joints, w_i link i's angular speed
+    cj = P[I_CJ]
+    if cj > 0.0:
+        for i in range(M):
+            j = i + 1
+            if j == M:
+                j = 0
+            im = i - 1
+            if im < 0:
+                im = M - 1
+            Tj = cj * (2.0 * scr[i] - scr[im] - scr[j])
+            dx = q[2 + 2 * j] - q[2 + 2 * i]
+            dy = q[3 + 2 * j] - q[3 + 2 * i]
+            L2 = dx * dx + dy * dy
+            if not L2 > 0.0:
+                L2 = 1e-300
+            fx = -Tj * dy / L2
+            fy = Tj * dx / L2
+            a[2 + 2 * i] += fx
+            a[3 + 2 * i] += fy
+            a[2 + 2 * j] -= fx
+            a[3 + 2 * j] -= fy
     # roller-seat contact (eqs 5-10 with the seat/flank profile, see module docstring)
     torque1 = 0.0
     torque2 = 0.0
@@ -294,7 +319,7 @@ def _hermite(t, T0, H, a0, w0, a1, w1):
 
 
 def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
-                     acc, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle):
+                     acc, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle, scr):
     """Advance x in place by ``nsteps`` fixed steps of ``method`` (0 velocity Verlet exactly as
     chainmodel.integrate.Verlet, 1 classic RK4); inputs from :func:`_hermite` and a linear load.
     Returns -1 on success or the index of the step after which the state diverged."""
@@ -308,14 +333,14 @@ def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
             ang, spd, ac = _HERMITE(t, T0, H, a0, w0, a1, w1)
             ld = L0 + (L1 - L0) * ((t - T0) / H if H > 0 else 0.0)
             st, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc, tension, fcon, side, dist,
-                                 seat_angle)
+                           seat_angle, scr)
             for i in range(nq):
                 v[i] += 0.5 * h * acc[i]
                 q[i] += h * v[i]
             ang, spd, ac = _HERMITE(t + h, T0, H, a0, w0, a1, w1)
             ld = L0 + (L1 - L0) * ((t + h - T0) / H if H > 0 else 0.0)
             st2, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc2, tension, fcon, side, dist,
-                                  seat_angle)
+                            seat_angle, scr)
             for i in range(nq):
                 v[i] += 0.5 * h * acc2[i]
             if st2 != 0:
@@ -345,7 +370,7 @@ def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
                 ang, spd, ac = _HERMITE(tt, T0, H, a0, w0, a1, w1)
                 ld = L0 + (L1 - L0) * ((tt - T0) / H if H > 0 else 0.0)
                 st, _ = _ACCEL(xt[:nq], xt[nq:], ang, spd, ac, ld, P, acc, tension, fcon,
-                                     side, dist, seat_angle)
+                               side, dist, seat_angle, scr)
                 for i in range(nq):
                     kk[i] = xt[nq + i]
                     kk[nq + i] = acc[i]
@@ -454,7 +479,7 @@ OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
 
 
 def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
-                   mids, tol, reverse, tooth_ratio, spans, out):
+                   scr, mids, tol, reverse, tooth_ratio, spans, out):
     """Every output (order OUTPUT_NAMES) at state x; the same as MultibodyModel's numpy path.
     velocity_ratio is driven / driver speed (the caller replaces it while the driver rests)."""
     n = x.shape[0] // 2
@@ -462,7 +487,7 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     q = x[:n]
     v = x[n:]
     status, shaft = _ACCEL(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist,
-                           seat_angle)
+                           seat_angle, scr)
     _SPANS(q, dist, side, seat_angle, tol, P, mids, spans)
     rigid = P[I_RIGID] != 0.0
     phi1 = tau if rigid else q[0]
@@ -548,6 +573,7 @@ class Workspace:
         self.side = np.zeros(M, np.int64)
         self.dist = np.zeros((2, M))
         self.seat_angle = np.zeros((2, M))
+        self.scr = np.zeros(M)
 
     def diagnostics(self):
         return self.tension, self.fcon, self.side, self.dist, self.seat_angle
@@ -558,14 +584,14 @@ def accel_numba(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
     diagnostics land in ``ws``."""
     a = np.empty(q.shape[0]) if out is None else out
     status, shaft = _accel_jit(q, v, float(tau), float(tau_d), float(tau_dd), float(load), P, a,
-                               ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle)
+                               ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle, ws.scr)
     return a, int(status), float(shaft)
 
 
 def outputs_numba(x, tau, tau_d, tau_dd, load, P, ws: Workspace, mids, tol, reverse,
                   tooth_ratio, spans, out):
     return int(_outputs_jit(x, float(tau), float(tau_d), float(tau_dd), float(load), P, ws.acc,
-                            ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle, mids,
+                            ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle, ws.scr, mids,
                             float(tol), bool(reverse), float(tooth_ratio), spans, out))
 
 
@@ -575,7 +601,7 @@ def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1
     return int(_run_fixed_jit(method, x, float(t0), float(h), int(nsteps), float(T0), float(H),
                               float(a0), float(w0), float(a1), float(w1), float(L0), float(L1),
                               P, ws.acc, ws.acc2, k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon,
-                              ws.side, ws.dist, ws.seat_angle))
+                              ws.side, ws.dist, ws.seat_angle, ws.scr))
 
 
 # --- vectorised numpy kernel (fallback) -------------------------------------------------------
@@ -617,6 +643,13 @@ def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
         ws.tension[:] = T
     F += f
     F -= np.roll(f, 1, axis=0)
+    if P[I_CJ] > 0.0:
+        L2 = Ls * Ls
+        omega = (d[:, 0] * dv[:, 1] - d[:, 1] * dv[:, 0]) / L2
+        Tj = P[I_CJ] * (2.0 * omega - np.roll(omega, 1) - np.roll(omega, -1))
+        fj = np.column_stack([-Tj * d[:, 1] / L2, Tj * d[:, 0] / L2])
+        F += fj
+        F -= np.roll(fj, 1, axis=0)
     # contact, both sprockets at once: arrays (2, M)
     cen = np.array([[P[I_CX], P[I_CY]], [0.0, 0.0]])
     R = np.array([P[I_R1], P[I_R2]])[:, None]
