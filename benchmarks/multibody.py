@@ -4,6 +4,7 @@
     python benchmarks/multibody.py --compare       # + model variants (Q forces, damping, seat)
     python benchmarks/multibody.py --figures docs/figures   # + the figures of docs/multibody.md
     python benchmarks/multibody.py --adaptive 0.02 # adaptive steppers timed over 0.02 s
+    python benchmarks/multibody.py --overhead      # compiled loop alone vs full runs
 
 xu2010 (seed 003 section 7) at 120 rpm for 1 s simulated, outputs every 1e-4 s. Error figures
 are against a reference run (compiled RK4 at a quarter of its automatic step, itself checked
@@ -68,15 +69,17 @@ def machine():
     return f"{name}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}"
 
 
-def stepper_table():
+def stepper_table(joint_damping=0.0, links_list=(46, 100, 200)):
+    extra = {"chain.joint_damping": joint_damping}
+    print()
     print(f"machine: {machine()}; python {platform.python_version()}; "
-          f"numba {'on' if chainmodel.models.multibody_kernels.numba_enabled() else 'off'}")
-    model = scene_for().model()
-    h_auto = {"verlet": 0.9 * 2 * model.stable_step(model.initial_state(scene_for().inputs(0))),
-              "rk4": 0.9 * 2 * math.sqrt(2) * model.stable_step(
-                  model.initial_state(scene_for().inputs(0)))}
-    ref, w, c = timed(scene_for(**{"solver.method": "rk4", "solver.step": h_auto["rk4"] / 4}))
-    ref8, _, _ = timed(scene_for(**{"solver.method": "rk4", "solver.step": h_auto["rk4"] / 8}))
+          f"numba {'on' if chainmodel.models.multibody_kernels.numba_enabled() else 'off'}; "
+          f"chain.joint_damping = {joint_damping:g} N.m.s/rad")
+    model = scene_for(**extra).model()
+    x0 = model.initial_state(scene_for().inputs(0))
+    h_rk4 = 0.9 * 2 * math.sqrt(2) * model.stable_step(x0)
+    ref, w, c = timed(scene_for(**extra, **{"solver.method": "rk4", "solver.step": h_rk4 / 4}))
+    ref8, _, _ = timed(scene_for(**extra, **{"solver.method": "rk4", "solver.step": h_rk4 / 8}))
     T_ref, rip_ref = metrics(ref)
     T8, rip8 = metrics(ref8)
     print(f"reference rk4 h/4: mean tight {T_ref:.3f} N, driven-speed ripple {rip_ref:.5f} rad/s "
@@ -86,9 +89,9 @@ def stepper_table():
           "err | driven ripple [rad/s] | err |")
     print("|---|---|---|---|---|---|---|---|---|")
     rows = []
-    for links in (46, 100, 200):
+    for links in links_list:
         for method in ("verlet", "rk4"):
-            sc = scene_for(links, **{"solver.method": method})
+            sc = scene_for(links, **extra, **{"solver.method": method})
             r, w, c = timed(sc)
             T, rip = metrics(r)
             step = sc.duration / r.stats["steps"] if r.stats.get("steps") else math.nan
@@ -100,6 +103,29 @@ def stepper_table():
                   f"{rip:.4f} | {eR} |", flush=True)
             rows.append((links, method, w, c))
     return rows
+
+
+def overhead():
+    """Where the time goes: the compiled Verlet loop alone over 1 s, and full runs with outputs
+    every 1e-4 s and 1e-3 s (CPU seconds per simulated second)."""
+    from chainmodel.models import multibody_kernels as K
+    sc = scene_for()
+    run_scene(sc.with_overrides(duration=0.01))  # warm the compiled code
+    print()
+    print("| what (xu2010, verlet, 1 s) | CPU s / sim s | wall s / sim s |")
+    print("|---|---|---|")
+    for interval in (1e-4, 1e-3):
+        r, w, c = timed(sc.with_overrides(output_interval=interval))
+        print(f"| full run, outputs every {interval:g} s | {c:.2f} | {w:.2f} |", flush=True)
+    m = sc.model()
+    x = m.initial_state(sc.inputs(0.0))
+    h = 0.9 * 2 * m.stable_step(x)
+    n = int(1.0 / h)
+    w_in = 120 * 2 * math.pi / 60
+    c0, w0 = time.process_time(), time.perf_counter()
+    K.run_fixed_numba(0, x, 0.0, h, n, 0.0, 1.0, 0.0, w_in, w_in, w_in, 43.2, 43.2, m.P, m.ws)
+    print(f"| compiled Verlet loop alone ({n} steps, constant speed) | "
+          f"{time.process_time() - c0:.2f} | {time.perf_counter() - w0:.2f} |")
 
 
 def adaptive_table(duration):
@@ -130,8 +156,16 @@ def compare():
         ("paper's isotropic dissipation S", {"multibody.paper_damping": True}, None),
         ("paper's bare circular seat (eq 9)", {"contact.seating_angle": math.pi}, None),
         ("tight centre distance (197.41 mm)", {"drive.centre_distance": 0.0}, None),
+        ("joint dampers 0.02 N.m.s/rad", {"chain.joint_damping": 0.02}, None),
         ("default at 600 rpm", {}, 600),
         ("Q forces on at 600 rpm", {"multibody.rotating_frame_forces": True}, 600),
+        # with the span modes damped the runs converge, so small differences can be read
+        ("joint dampers 0.02, Q forces on", {"chain.joint_damping": 0.02,
+                                             "multibody.rotating_frame_forces": True}, None),
+        ("joint dampers 0.02 at 600 rpm", {"chain.joint_damping": 0.02}, 600),
+        ("joint dampers 0.02, Q forces on, 600 rpm", {"chain.joint_damping": 0.02,
+                                                      "multibody.rotating_frame_forces": True},
+         600),
     ]
     for label, params, rpm in variants:
         sc = scene_for(**params)
@@ -255,10 +289,15 @@ def main(argv=None):
     ap.add_argument("--adaptive", type=float, default=0.0,
                     help="also time the adaptive steppers over this many simulated seconds")
     ap.add_argument("--skip-table", action="store_true")
+    ap.add_argument("--overhead", action="store_true",
+                    help="also split the cost into the compiled loop and the per-output Python")
     args = ap.parse_args(argv)
     print(time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()))
     if not args.skip_table:
         stepper_table()
+        stepper_table(0.02, (46,))
+    if args.overhead:
+        overhead()
     if args.adaptive > 0:
         adaptive_table(args.adaptive)
     if args.compare:
