@@ -262,6 +262,23 @@ def figures(outdir: Path):
     fig.savefig(outdir / "multibody_torsional.png", dpi=100)
     plt.close(fig)
 
+    # one link's tension as it travels round the loop (seed 003's reading of Fig. 7)
+    tens = np.array([s["link_tension"] for _, s in r.snapshots])
+    spans_ = np.array([s["tight_span_rollers"] for _, s in r.snapshots])
+    win2 = (ts >= 0.5) & (ts <= 1.0)
+    in_tight = ((k - spans_[:, 0]) % d.links) < ((spans_[:, 1] - spans_[:, 0]) % d.links)
+    fig, ax = plt.subplots(figsize=(9, 3.8), layout="constrained")
+    ax.plot(ts[win2], tens[win2, k], lw=0.7, label=f"link {k} (roller {k} to {k + 1})")
+    yl = ax.get_ylim()
+    ax.fill_between(ts[win2], yl[0], yl[1], where=in_tight[win2], color="C1", alpha=0.15,
+                    label="link in the tight span")
+    ax.set_ylim(yl)
+    ax.set(xlabel="time [s]", ylabel="tension [N]",
+           title="one link's tension on its way round the chain")
+    ax.legend(fontsize="small", loc="upper right")
+    fig.savefig(outdir / "multibody_link_tension.png", dpi=100)
+    plt.close(fig)
+
     # chain snapshot with contact forces
     snap = r.snapshots[i0][1]
     fig, ax = plt.subplots(figsize=(9, 5), layout="constrained")

@@ -606,6 +606,16 @@ def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1
 
 # --- vectorised numpy kernel (fallback) -------------------------------------------------------
 
+def _next(a):
+    """a[i + 1] with wrap-around (np.roll(a, -1, axis=0), without its overhead)."""
+    return np.concatenate((a[1:], a[:1]))
+
+
+def _prev(a):
+    """a[i - 1] with wrap-around (np.roll(a, 1, axis=0))."""
+    return np.concatenate((a[-1:], a[:-1]))
+
+
 def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
     """Same as :func:`accel_numba`, vectorised over rollers with numpy (no per-roller loops)."""
     q = np.asarray(q, float)
@@ -625,13 +635,13 @@ def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
     zv = v[2:].reshape(M, 2)
     F = np.zeros((M, 2))
     # links
-    d = np.roll(z, -1, axis=0) - z
+    d = _next(z) - z
     with np.errstate(invalid="ignore", divide="ignore"):
         L = np.hypot(d[:, 0], d[:, 1])
         status = int(not np.all((L > P[I_LMIN]) & (L < P[I_LMAX])))
         Ls = np.where(L > 0, L, 1e-300)
         e = d / Ls[:, None]
-    dv = np.roll(zv, -1, axis=0) - zv
+    dv = _next(zv) - zv
     rate = np.einsum("ij,ij->i", e, dv)
     if paper_damp:
         T = k * (L - l0)
@@ -642,14 +652,14 @@ def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
         f = T[:, None] * e
         ws.tension[:] = T
     F += f
-    F -= np.roll(f, 1, axis=0)
+    F -= _prev(f)
     if P[I_CJ] > 0.0:
         L2 = Ls * Ls
         omega = (d[:, 0] * dv[:, 1] - d[:, 1] * dv[:, 0]) / L2
-        Tj = P[I_CJ] * (2.0 * omega - np.roll(omega, 1) - np.roll(omega, -1))
+        Tj = P[I_CJ] * (2.0 * omega - _prev(omega) - _next(omega))
         fj = np.column_stack([-Tj * d[:, 1] / L2, Tj * d[:, 0] / L2])
         F += fj
-        F -= np.roll(fj, 1, axis=0)
+        F -= _prev(fj)
     # contact, both sprockets at once: arrays (2, M)
     cen = np.array([[P[I_CX], P[I_CY]], [0.0, 0.0]])
     R = np.array([P[I_R1], P[I_R2]])[:, None]
