@@ -64,10 +64,10 @@ def harmonic_amplitude(t, x, omega):
 
 
 def integrate_direct(c, Omega2, t_end: float, epsilon: float = 1.0, xi0=0.0, xi_slack0=0.0,
-                     u10=0.0, dxi0=0.0, omega_theta=None, eta_scale: float = 1.0,
+                     u10=0.0, dxi0=0.0, du10=0.0, omega_theta=None, eta_scale: float = 1.0,
                      p0: float = 0.0, Omega0: float = 0.0, p1: float = 0.0, Omega1: float = 0.0,
                      window_periods: int = 40, samples_per_period: int = 32,
-                     rtol: float = 1e-7, atol: float = 1e-11, method: str = "LSODA") -> DirectRun:
+                     rtol: float = 1e-7, atol: float = 1e-11, method: str = "DOP853") -> DirectRun:
     """Integrate eqs 68-70 from rest (plus the given initial displacements) to ``t_end`` for
     every broadcast combination of ``Omega2`` and the initial values, in one ``solve_ivp``
     call, and extract the steady amplitudes over the last ``window_periods`` periods of the
@@ -78,8 +78,8 @@ def integrate_direct(c, Omega2, t_end: float, epsilon: float = 1.0, xi0=0.0, xi_
     "inertia" policy of modulation.py) times ``eta_scale``."""
     if not (np.isfinite(epsilon) and epsilon > 0):
         raise ValueError(f"epsilon must be a positive number, got {epsilon!r}")
-    Omega2, xi0, xi_slack0, u10, dxi0, om_th = np.broadcast_arrays(
-        *(np.asarray(x, float) for x in (Omega2, xi0, xi_slack0, u10, dxi0,
+    Omega2, xi0, xi_slack0, u10, dxi0, du10, om_th = np.broadcast_arrays(
+        *(np.asarray(x, float) for x in (Omega2, xi0, xi_slack0, u10, dxi0, du10,
                                           c.omega_theta if omega_theta is None else omega_theta)))
     shape = Omega2.shape
     n = Omega2.size
@@ -108,7 +108,7 @@ def integrate_direct(c, Omega2, t_end: float, epsilon: float = 1.0, xi0=0.0, xi_
         return np.concatenate([dxi, ddxi, dxs, ddxs, du1, ddu1])
 
     z0 = np.concatenate([xi0.ravel(), dxi0.ravel(), xi_slack0.ravel(), np.zeros(n),
-                         u10.ravel(), np.zeros(n)])
+                         u10.ravel(), du10.ravel()])
     period = 4.0 * np.pi / W2                       # span period at Omega2/2
     t_win = t_end - window_periods * float(period.max())
     if t_win <= 0:

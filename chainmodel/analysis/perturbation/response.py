@@ -68,7 +68,7 @@ def sprocket_response(c, ratio=None, numerical_ratio=None, T1: float = 400.0) ->
 
 
 def combined_response(c, sigma2_ratio=None, sigma_i_ratio=None, policy: str = "inertia",
-                      a0=(1e-3, None), T1: float = 250.0, T1_max: float = 1000.0) -> dict:
+                      a0=(1e-3, None), T1: float = 150.0, T1_max: float = 600.0) -> dict:
     """Figs 8-9: span amplitude a and sprocket amplitude v from the combined modulation
     equations 129-132 (section 5.12) on the grid sigma2/omega_m x sigma_i/omega_m.
 
