@@ -76,6 +76,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.cli", "register_kinematics"),
     ("chainmodel.cli", "register_wrap"),
     ("chainmodel.cli", "register_presets"),
+    ("chainmodel.analysis.perturbation.cli", "register"),
 ]
 
 

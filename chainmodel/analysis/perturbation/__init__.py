@@ -15,22 +15,35 @@ docs/perturbation.md explains every modelling choice (P_t, l, Omega2, epsilon) a
 and could not be reproduced.
 """
 
-from .coefficients import (PARAMETER_NAMES, TABLE2, Coefficients, coefficients,
-                           internal_resonance_check, reference_tension, table2)
-from .direct import integrate_direct, parametric_initial_state
-from .modulation import (POLICIES, combined_coefficients, integrate_combined,
-                         integrate_parametric, integrate_sprocket, polish_stationary,
-                         settle_combined)
-from .response import combined_response, parametric_response, sprocket_response
-from .stationary import (combined_trivial_amplitude, parametric_branches,
-                         parametric_instability_band, parametric_polar_jacobian,
-                         parametric_trivial_eigenvalues, sprocket_amplitude)
+import importlib
 
-__all__ = ["PARAMETER_NAMES", "TABLE2", "Coefficients", "coefficients",
-           "internal_resonance_check", "reference_tension", "table2",
-           "integrate_direct", "parametric_initial_state",
-           "POLICIES", "combined_coefficients", "integrate_combined", "integrate_parametric",
-           "integrate_sprocket", "polish_stationary", "settle_combined",
-           "combined_response", "parametric_response", "sprocket_response",
-           "combined_trivial_amplitude", "parametric_branches", "parametric_instability_band",
-           "parametric_polar_jacobian", "parametric_trivial_eigenvalues", "sprocket_amplitude"]
+# Names resolve lazily (PEP 562) so that importing the CLI hook (``.cli``), which every
+# ``chainmodel`` call does, does not import scipy.
+_EXPORTS = {
+    "coefficients": ["PARAMETER_NAMES", "TABLE2", "Coefficients", "coefficients",
+                     "internal_resonance_check", "reference_tension", "table2"],
+    "direct": ["integrate_direct", "parametric_initial_state"],
+    "modulation": ["POLICIES", "combined_coefficients", "integrate_combined",
+                   "integrate_parametric", "integrate_sprocket", "polish_stationary",
+                   "settle_combined"],
+    "response": ["combined_response", "parametric_response", "sprocket_response"],
+    "stationary": ["combined_trivial_amplitude", "parametric_branches",
+                   "parametric_instability_band", "parametric_polar_jacobian",
+                   "parametric_trivial_eigenvalues", "sprocket_amplitude"],
+    "cli": ["register"],
+}
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
+__all__ = list(_WHERE)
+
+
+def __getattr__(name):
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
