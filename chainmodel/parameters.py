@@ -179,7 +179,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        "add the chain's mass to the sprockets at levels 1-2: rollers seated on a sprocket at its "
        "pitch radius, each span as a bar moving with its endpoints (consistent mass matrix); "
        "off gives seed 004 eq 50 exactly (docs/reduced_models.md)", kind=bool, levels=(1, 2)),
-    _p("torsional.seat_compliance", False, "",
+    _p("torsional.seat_compliance", True, "",
        "put the seated rollers' contact compliance in series with each span at levels 1-2: "
        "each span end adds 1/K_seat, K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (a ladder "
        "of seat springs contact.stiffness and links), plus the roller-seat clearance "

@@ -81,7 +81,9 @@ def _table2_values(drive: Drive) -> dict[str, Any]:
             "chain.link_stiffness": t2["EA"] / drive.pitch,
             "chain.roller_radius": d1 / 2, "contact.seat_radius": 0.505 * d1,
             "driven.inertia": t2["J1"], "driven.damping": t2["d1"],
-            "driver.inertia": t2["J1"], "input_shaft.rigid": True}
+            "driver.inertia": t2["J1"], "input_shaft.rigid": True,
+            # seed 004's model joins the spans rigidly to the sprockets (no seat compliance)
+            "torsional.seat_compliance": False}
 
 
 def _preset_scene(name: str) -> dict[str, Any]:
