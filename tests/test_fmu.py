@@ -259,7 +259,7 @@ def test_dynamic_levels_equal_library(chaindrive_fmu_dir):
     """In a subprocess with numba switched off (as in an install without the 'fast' extra):
     otherwise the FMU's own copy of the kernels is JIT-compiled afresh, which costs seconds
     and tests numba rather than the adapter."""
-    env = dict(os.environ, CHAINMODEL_NUMBA="0", CHAINMODEL_NO_NUMBA="1")
+    env = dict(os.environ, CHAINMODEL_NUMBA="0")
     code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import test_fmu; "
             f"print(test_fmu.dynamic_levels_against_library({str(chaindrive_fmu_dir)!r}))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

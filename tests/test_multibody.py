@@ -279,7 +279,7 @@ def test_numpy_path_matches_numba(extra, monkeypatch):
         for k in ("contact_sprocket", "engaged_driver", "engaged_driven", "tight_span_rollers"):
             assert np.array_equal(s1[k], s2[k]), k
     # the environment switch selects the numpy path
-    monkeypatch.setenv("CHAINMODEL_NO_NUMBA", "1")
+    monkeypatch.setenv("CHAINMODEL_NUMBA", "0")
     assert not K.numba_enabled()
     assert not scene.model().use_numba
 

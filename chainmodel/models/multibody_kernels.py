@@ -9,15 +9,16 @@ seed 000/004): q = [phi1, phi2, x_0, y_0, x_1, y_1, ...], v = dq/dt, with phi1 (
 (driven) forward-positive, i.e. clockwise in XY. A seat j of sprocket s sits at angle
 ``phase0_s - phi_s + (2 pi / z_s) j`` about the sprocket centre.
 
-Set the environment variable ``CHAINMODEL_NO_NUMBA=1`` to force the numpy path.
+Set the environment variable ``CHAINMODEL_NUMBA=0`` to force the numpy path (chainmodel._numba).
 """
 
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
+
+from .._numba import numba_requested
 
 __all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
            "PARAM_FIELDS", "N_PARAMS"]
@@ -55,8 +56,8 @@ except Exception:  # pragma: no cover
 
 
 def numba_enabled() -> bool:
-    """True when the numba kernels are available and not disabled by CHAINMODEL_NO_NUMBA."""
-    return HAVE_NUMBA and os.environ.get("CHAINMODEL_NO_NUMBA", "").strip() in ("", "0")
+    """True when the numba kernels are available and not disabled by CHAINMODEL_NUMBA=0."""
+    return HAVE_NUMBA and numba_requested()
 
 
 # --- explicit-loop kernel (compiled by numba) -------------------------------------------------

@@ -26,9 +26,10 @@ Layout of the constant vectors (built by :func:`geometry_constants` and the mode
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
+
+from .._numba import import_numba
 
 __all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
 
@@ -38,14 +39,10 @@ _TWO_PI = 2.0 * math.pi
 G_SIZE = 13
 
 
-def _numba_wanted() -> bool:
-    return os.environ.get("CHAINMODEL_NUMBA", "1").strip().lower() not in ("0", "false", "no", "off")
-
-
-try:  # optional acceleration; everything below also runs as plain Python
-    if not _numba_wanted():
+_numba = import_numba()   # optional acceleration; everything below also runs as plain Python
+try:
+    if _numba is None:
         raise ImportError
-    import numba as _numba
 
     def jit(fn):
         """Compile with numba (cached on disk); the plain function stays at ``.py_func``."""
