@@ -254,7 +254,6 @@ def dynamic_levels_against_library(unzipdir):
     return sorted(k for k in MODEL_CLASSES if k > 0)
 
 
-@pytest.mark.skipif(not [k for k in MODEL_CLASSES if k > 0], reason="no dynamic level yet")
 def test_dynamic_levels_equal_library(chaindrive_fmu_dir):
     """In a subprocess with numba switched off (as in an install without the 'fast' extra):
     otherwise the FMU's own copy of the kernels is JIT-compiled afresh, which costs seconds
@@ -265,7 +264,7 @@ def test_dynamic_levels_equal_library(chaindrive_fmu_dir):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env=env, cwd=Path(__file__).parents[1], timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert proc.stdout.strip().splitlines()[-1] == str(sorted(k for k in MODEL_CLASSES if k > 0))
+    assert proc.stdout.strip().splitlines()[-1] == "[1, 2, 3]"     # every dynamic level ran
 
 
 def test_fmpy_simulate_fmu_equals_library(chaindrive_fmu):
@@ -520,11 +519,3 @@ def test_fmu_uses_its_vendored_chainmodel_and_needs_only_numpy_scipy(chaindrive_
     assert res["out"]["driver.angle"] == pytest.approx(0.3 + 10.0 * 1e-3, rel=1e-14)
     assert res["out"]["driver.speed"] == 10.0
     assert res["out"]["driven.speed"] > 0
-
-
-@pytest.mark.skipif(all(k in MODEL_CLASSES for k in range(4)), reason="every level is built")
-def test_simulate_fmu_reports_a_missing_level_as_value_error(chaindrive_fmu):
-    level = next(k for k in range(4) if k not in MODEL_CLASSES)
-    scene = Scene.from_preset("xu2010", fidelity=level, duration=0.01, output_interval=1e-3)
-    with pytest.raises(ValueError, match=f"fidelity = {level}"):
-        simulate_fmu(chaindrive_fmu, scene)
