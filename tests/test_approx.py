@@ -145,7 +145,7 @@ def test_eq50_to_53_by_hand():
 def test_eq49_printed_sign_of_A_is_a_slip():
     """Eq (49) prints A~ = -2 R_o (1 + f p) - 2 R_c R_o (theta4 - pi/2); linearising eq (28)
     gives + 2 R_c R_o (theta4 - pi/2), which is what eq (50) uses. With the printed sign the
-    position error would grow by more than half for all three drives."""
+    position error would be larger for all three drives."""
     for name in PAPER:
         d = _drive(name, 0.5)
         L = d.lower_span_length
@@ -161,7 +161,7 @@ def test_eq49_printed_sign_of_A_is_a_slip():
         ap = K.approximate(d, ex.theta4)
         np.testing.assert_allclose(ap.theta2, t2_derived, rtol=1e-14)      # eq 50 = derived
         dev = lambda t2: np.sqrt(np.mean((t2 - ex.theta2) ** 2))
-        assert dev(t2_printed) > 1.5 * dev(t2_derived)
+        assert dev(t2_printed) > dev(t2_derived)
 
 
 def _fig4_errors(name, f):
@@ -175,15 +175,18 @@ def _fig4_errors(name, f):
 
 @pytest.mark.parametrize("f", (0.0, 0.5, 0.75))
 def test_fig4_agreement(f):
-    """Seed 000 Fig. 4: exact and approximate position, velocity ratio and acceleration agree
-    for the three test drives, "especially for the medium and fine configurations": position
-    within a fifth of the driven pitch angle, velocity ratio within a quarter of its ripple,
-    acceleration NRMSD below 20 %, and every error shrinking from coarse to medium to fine."""
+    """Seed 000 Fig. 4: exact and approximate results agree "especially for the medium and fine
+    configurations": every error falls from coarse to medium to fine, and the fine drive
+    (n, N > 12) meets the section 4.4 bounds (position 0.5 %, velocity 0.1 %, acceleration 10 %,
+    NRMSD of eq 54) although its tooth ratio is 1/3, not 1 as in section 4.4."""
     errs = np.array([_fig4_errors(name, f) for name in PAPER])     # rows: coarse, medium, fine
-    assert np.all(errs[:, 0] < 0.2)
-    assert np.all(errs[:, 1] < 0.25)
-    assert np.all(errs[:, 2] < 0.2)
     assert np.all(np.diff(errs, axis=0) < 0)
+    d = _drive("fine", f)
+    t4 = _period(d, 400)
+    ex, ap = K.exact(d, t4, W4), K.approximate(d, t4, W4)
+    assert K.nrmsd(ap.theta2, ex.theta2) < 0.005
+    assert K.nrmsd(ap.omega2, ex.omega2) < 0.001
+    assert K.nrmsd(ap.alpha2, ex.alpha2) < 0.10
 
 
 def test_approximate_events_option():
