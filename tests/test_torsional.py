@@ -73,6 +73,25 @@ def test_length_derivatives_are_the_moment_arms():
         assert d2[1] == pytest.approx(g[11], rel=1e-6)    # lower runs onto the driven sprocket
 
 
+@pytest.mark.parametrize("name", ["xu2010", "C1", "A1", "coarse"])
+def test_scalar_geometry_settles_just_before_events(name):
+    """Within ~1e-9 rad before a seating the tolerant window can flip between two endpoint
+    candidates (found in wrapping._span); the scalar kernel must settle on the same span as
+    chain_geometry there too."""
+    drive = chainmodel.Scene.from_preset(name).drive
+    G = S.geometry_constants(drive)
+    period = 2 * math.pi / drive.n_driver
+    phi1 = (period * np.arange(1, 6)[:, None]
+            - np.array([1e-8, 1e-9, 3e-10, 1e-11, 0.0])[None, :]).ravel()
+    phi2 = driven_rotation(drive, phi1).driven_angle
+    g = chain_geometry(drive, phi1, phi2)
+    for k in range(phi1.size):
+        r = S.span_geometry(phi1[k], phi2[k], G)
+        assert r[0] == pytest.approx(g.upper.length[k], rel=1e-12)
+        assert r[9] == pytest.approx(g.lower.length[k], rel=1e-12)
+        assert r[3] == g.upper_links[k]
+
+
 # --- statics: seed 004 eqs 15-17 ----------------------------------------------------------
 
 @pytest.mark.parametrize("angle", [0.0, 0.13, 0.29, 0.41])

@@ -82,9 +82,17 @@ def _span(cfx, cfy, rf, af, phf, ctx, cty, rt, at, pht, dir0):
     jt = 0.0
     angf = 0.0
     angt = 0.0
-    for _ in range(8):
-        jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + _EDGE)
-        jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + _EDGE)
+    edge = _EDGE
+    for it in range(16):
+        if it == 8:
+            # Within about _EDGE (seat units) before an event the tolerant window flips between
+            # the two candidate endpoints; the strict window settles there (as wrapping._span).
+            edge = 0.0
+            d = dir0
+            jf_old = -1.0e300
+            jt_old = -1.0e300
+        jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
+        jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
         angf = phf + 2.0 * af * jf
         angt = pht + 2.0 * at * jt
         ax = cfx + rf * math.cos(angf)
