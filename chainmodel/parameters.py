@@ -184,6 +184,12 @@ PARAMETERS: tuple[Parameter, ...] = (
        "each span end adds 1/K_seat, K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (a ladder "
        "of seat springs contact.stiffness and links), plus the roller-seat clearance "
        "(docs/reduced_models.md)", kind=bool, levels=(1, 2)),
+    _p("torsional.mean_link_compliance", True, "",
+       "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
+       "tooth-period-mean link count n, while its stretch follows the current count: the tension "
+       "stays continuous through seating and release as in the multibody model; off, the "
+       "current count makes the tension step by T / n at each event (docs/reduced_models.md)",
+       kind=bool, levels=(1, 2)),
     # level 2
     _p("modal.modes", 1, "", "transverse Galerkin modes per span (seed 004 eq 57)",
        kind=int, minimum=1, maximum=20, levels=(2,)),

@@ -124,21 +124,27 @@ def test_static_split_reproduces_eqs_15_17(angle):
 
 
 def test_running_mean_tensions_follow_eqs_15_17_with_speed_damping():
-    """Steady running (slow ramp, no start-up ringing): mean tensions over whole tooth periods
-    are P0, P0~ of eqs 15-16 with M1 = d1 S/R1 + R1 f1 (eq 17, S/R1 the driven speed) and
-    P_tot = 1000 N (Table 2)."""
+    """Steady running (slow ramp): mean tensions over whole tooth periods are P0, P0~ of eqs
+    15-16 with M1 = d1 S/R1 + R1 f1 (eq 17, S/R1 the driven speed). Eqs 15-16 are a linear
+    split, so both spans must stay taut: with Table 2's P_tot = 1000 N the C1 drive's own
+    wrapping-length variation (about +-130 N at rest) and the ringing left by crossing the 29 Hz
+    sprocket mode (0.5 % damping) drop the slack span to zero now and then, so the test uses
+    P_tot = 2000 N (static span tension 1000 N) and checks that precondition first."""
     t2 = _table2()
+    static = 1000.0
     sc = chainmodel.Scene.from_preset("C1", fidelity=1, duration=1.6, ramp_time=1.0,
-                                      output_interval=1e-3)
+                                      output_interval=1e-3, static_tension=static)
     r = chainmodel.simulate(sc)
     drive = sc.drive
     period = 2 * math.pi / (sc.operating.speed * drive.n_driver)
     mask = r.time >= 1.6 - 40 * period - 1e-9
+    assert np.min(r["slack_span.tension"][mask]) > 0.0      # linear regime: both spans taut
     r1 = drive.driven.pitch_radius
     w2 = sc.operating.speed * drive.tooth_ratio
     m1 = t2["d1"] * w2 + r1 * t2["f1"]
-    p0 = 0.5 * (t2["P_tot"] + m1 / r1)
-    p0t = 0.5 * (t2["P_tot"] - m1 / r1)
+    p_tot = 2 * static
+    p0 = 0.5 * (p_tot + m1 / r1)
+    p0t = 0.5 * (p_tot - m1 / r1)
     assert np.mean(r["tight_span.tension"][mask]) == pytest.approx(p0, rel=0.02)
     assert np.mean(r["slack_span.tension"][mask]) == pytest.approx(p0t, rel=0.05)
 

@@ -162,7 +162,8 @@ def span_geometry(phi1, phi2, G):
 P_K_LINK, P_C_LINK, P_P_FREE, P_SEAT_C, P_SEAT_SLACK, P_RIGID, P_K_SHAFT, P_C_SHAFT = range(8)
 P_D2, P_J11, P_J12, P_J22, P_RHOA, P_MODES, P_LBAR_U, P_LBAR_L = range(8, 16)
 P_ZETA, P_W1_U, P_W1_L, P_IMPULSE, P_REF_U, P_REF_L, P_GN_U, P_GN_L, P_PITCH = range(16, 25)
-P_SIZE = 25
+P_NBAR_U, P_NBAR_L = range(25, 27)
+P_SIZE = 27
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
@@ -195,12 +196,17 @@ def _coriolis(k, j):
 
 @jit
 def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
-             seat_slack, length_rate):
+             seat_slack, length_rate, links_compliance):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
-    change marks the switch: min(k delta, T_raw), continuous through both ways of going slack."""
-    k_eff = 1.0 / (links / k_link + seat_c)
+    change marks the switch: min(k delta, T_raw), continuous through both ways of going slack.
+
+    The stretch uses the span's current link count ``links``; its compliance and damping use
+    ``links_compliance`` - the same count, or the tooth-period mean (torsional.
+    mean_link_compliance): a seating roller's link keeps its elongation on the sprocket, so the
+    span does not stiffen by a whole link at the event and the tension stays continuous."""
+    k_eff = 1.0 / (links_compliance / k_link + seat_c)
     delta = length + stretch_modal - links * p_free - seat_slack
-    raw = k_eff * delta + (c_link / links) * (length_rate + stretch_rate)
+    raw = k_eff * delta + (c_link / links_compliance) * (length_rate + stretch_rate)
     switch = min(k_eff * delta, raw)
     if switch > 0.0:
         return raw, switch
@@ -281,10 +287,12 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     # --- tensions (seed 004 eq 37 in dimensional form, both spans)
     rate_u = aue * w1 - aus * w2
     rate_l = -als * w1 + ale * w2
+    nc_u = nu if P[P_NBAR_U] <= 0.0 else P[P_NBAR_U]
+    nc_l = nl if P[P_NBAR_L] <= 0.0 else P[P_NBAR_L]
     t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_u)
+                        P[P_SEAT_SLACK], rate_u, nc_u)
     t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_l)
+                        P[P_SEAT_SLACK], rate_l, nc_l)
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
     j11 = P[P_J11]

@@ -84,6 +84,7 @@ class TorsionalModel(Model):
                      "chain.link_mass", "driver.inertia", "driven.inertia", "driven.damping",
                      "input_shaft.stiffness", "input_shaft.damping", "input_shaft.rigid",
                      "contact.stiffness", "torsional.chain_inertia", "torsional.seat_compliance",
+                     "torsional.mean_link_compliance",
                      "gravity"):
             p[name] = BY_NAME[name].check(p[name])
         self.rigid = bool(p["input_shaft.rigid"])
@@ -160,6 +161,8 @@ class TorsionalModel(Model):
         P[S.P_RHOA] = p["chain.link_mass"] / d.pitch
         P[S.P_MODES] = self.n_modes
         P[S.P_PITCH] = d.pitch
+        if p["torsional.mean_link_compliance"]:
+            P[S.P_NBAR_U], P[S.P_NBAR_L] = self.reference["n_up"], self.reference["n_low"]
         return P
 
     # --- state -----------------------------------------------------------------------------
