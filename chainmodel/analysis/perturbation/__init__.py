@@ -35,6 +35,10 @@ _EXPORTS = {
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 __all__ = list(_WHERE)
 
+# The function ``coefficients`` shares its name with its module; bind it eagerly (the module
+# is light) so that a later import of the submodule cannot shadow it.
+from .coefficients import coefficients  # noqa: E402
+
 
 def __getattr__(name):
     module = _WHERE.get(name)

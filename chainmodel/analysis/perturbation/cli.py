@@ -40,7 +40,9 @@ def register(subparsers) -> None:
     p.add_argument("--policy", default="inertia", choices=("inertia", "table", "nominal"),
                    help="combined case: how omega_theta follows sigma_i (docs/perturbation.md)")
     p.add_argument("--points", type=int, default=None, metavar="N",
-                   help="sweep points (combined: per axis; default 521 / 601 / 36)")
+                   help="sweep points: parametric 521, sprocket 601, combined 36 along "
+                        "sigma2/omega_m in [-2, 1.5] (sigma_i/omega_m from -1.9 to 1 at the same "
+                        "spacing; 71 gives the 0.05 grid of the docs, several minutes)")
     add_drive_arguments(p)
     add_output_arguments(p, csv_help="write the sweep as CSV columns",
                          plot_help="write the figure as PNG (combined: <stem>_span.png and "
@@ -102,8 +104,9 @@ def run_frequency_response(args) -> int:
         columns = {"omega2_over_omega_theta": data["ratio"], "v": data["v"]}
     else:
         k = 36 if n is None else n
+        step = 3.5 / (k - 1)
         data = response.combined_response(c, np.linspace(-2.0, 1.5, k),
-                                          np.linspace(-1.95, 1.0, k), policy=args.policy)
+                                          np.arange(-1.9, 1.0 + 1e-9, step), policy=args.policy)
         summary = _combined_summary(c, data)
         S2, SI = np.meshgrid(data["sigma2_ratio"], data["sigma_i_ratio"])
         columns = {"sigma2_over_omega_m": S2.ravel(), "sigma_i_over_omega_m": SI.ravel()}

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-__all__ = ["DirectRun", "integrate_direct", "harmonic_amplitude", "parametric_initial_state"]
+__all__ = ["DirectRun", "integrate_direct", "harmonic_amplitude", "parametric_initial_state",
+           "combined_initial_state"]
 
 
 def parametric_initial_state(a, psi2, Omega2):
@@ -35,6 +36,16 @@ def parametric_initial_state(a, psi2, Omega2):
     back-substitution has the sign used here)."""
     a, psi2, Omega2 = np.broadcast_arrays(*(np.asarray(x, float) for x in (a, psi2, Omega2)))
     return a * np.cos(0.5 * psi2), a * 0.5 * Omega2 * np.sin(0.5 * psi2)
+
+
+def combined_initial_state(y, Omega2):
+    """(xi, xi', u1, u1') at t = 0 of the first-order solution of section 5.12 for a Cartesian
+    modulation state y = (Re b, Im b, Re w, Im w) (modulation.py): xi = Re(b e^{i Omega2 t/2}),
+    u1 = Re(w e^{i Omega2 t}), i.e. q0 = a cos(Omega2 T0/2 - psi2/2) and
+    nu0 = v cos(Omega2 T0 + psi1 - psi2) (the paper prints psi2 - psi1)."""
+    y = np.asarray(y, float)
+    Omega2 = np.asarray(Omega2, float)
+    return y[0], -0.5 * Omega2 * y[1], y[2], -Omega2 * y[3]
 
 
 @dataclass(frozen=True)

@@ -55,8 +55,16 @@ class CombinedCoefficients:
     f2: np.ndarray          #: -omega_theta p2 / 2
 
 
-def combined_coefficients(c, sigma_i, policy: str = "inertia") -> CombinedCoefficients:
-    """The coefficients of eqs 129-132 (eq 135) at internal detuning ``sigma_i`` (eq 125)."""
+def combined_coefficients(c, sigma_i, policy: str = "inertia",
+                          epsilon: float = 1.0) -> CombinedCoefficients:
+    """The coefficients of eqs 129-132 (eq 135) at internal detuning ``sigma_i`` (eq 125).
+
+    ``epsilon`` is the bookkeeping parameter of eq 125 used where the coefficients need
+    omega_theta = 2 omega_m + epsilon sigma_i (policies "inertia" and "table"); 1 is the
+    physical system, a smaller value matches a direct integration of eqs 68-70 run at that
+    epsilon (direct.py), and epsilon -> 0 is the "nominal" policy."""
+    if not (np.isfinite(epsilon) and epsilon > 0):
+        raise ValueError(f"epsilon must be a positive number, got {epsilon!r}")
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     sigma_i = np.asarray(sigma_i, float)
@@ -65,11 +73,11 @@ def combined_coefficients(c, sigma_i, policy: str = "inertia") -> CombinedCoeffi
         om_th = np.full_like(sigma_i, 2.0 * c.omega_m)
         eta = om_th**2 * mpi2 / 8.0
     else:
-        om_th = 2.0 * c.omega_m + sigma_i
+        om_th = 2.0 * c.omega_m + epsilon * sigma_i
         if np.any(om_th <= 0):
-            raise ValueError(f"sigma_i must exceed -2 omega_m = {-2 * c.omega_m:.6g} (eq 125: "
-                             f"omega_theta = 2 omega_m + sigma_i > 0), got min "
-                             f"{float(np.min(sigma_i)):.6g}")
+            raise ValueError(f"sigma_i must exceed -2 omega_m/epsilon = "
+                             f"{-2 * c.omega_m / epsilon:.6g} (eq 125: omega_theta = 2 omega_m "
+                             f"+ epsilon sigma_i > 0), got min {float(np.min(sigma_i)):.6g}")
         eta = om_th**2 * mpi2 / 8.0 if policy == "inertia" else np.full_like(sigma_i, c.eta_m)
     return CombinedCoefficients(
         mu_m=c.mu_m, mu_theta=c.mu_theta, omega_m=c.omega_m, omega_theta=om_th,
@@ -174,7 +182,7 @@ def _integrate(y0, rhs, T1, window, rtol, atol, shape=None, t0=0.0):
 def integrate_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, T1: float = 600.0,
                        window: float = 100.0, policy: str = "inertia", coupled: bool = True,
                        rtol: float = 1e-6, atol: float = 1e-10, tol: float = 1e-3,
-                       y0=None, t0: float = 0.0) -> ModulationRun:
+                       y0=None, t0: float = 0.0, epsilon: float = 1.0) -> ModulationRun:
     """Integrate the combined modulation equations (129-132, Cartesian form) from slow time
     ``t0`` to ``T1`` for every broadcast combination of ``sigma2``, ``sigma_i``, initial
     amplitudes ``a0``, ``v0`` and initial phase ``psi0`` (of b; w starts real), or from the
@@ -182,7 +190,7 @@ def integrate_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, T1: float 
     sigma2, sigma_i, a0, v0, psi0 = np.broadcast_arrays(*(np.asarray(x, float) for x in
                                                           (sigma2, sigma_i, a0, v0, psi0)))
     shape = sigma2.shape
-    k = combined_coefficients(c, sigma_i.ravel(), policy)
+    k = combined_coefficients(c, sigma_i.ravel(), policy, epsilon)
     s2, si = sigma2.ravel(), sigma_i.ravel()
     if y0 is None:
         y0 = np.stack([a0.ravel() * np.cos(psi0.ravel()), a0.ravel() * np.sin(psi0.ravel()),
@@ -216,7 +224,8 @@ class SettledResponse:
 
 def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str = "inertia",
                     T1: float = 150.0, T1_max: float = 600.0, window: float = 100.0,
-                    coupled: bool = True, rtol: float = 1e-5) -> SettledResponse:
+                    coupled: bool = True, rtol: float = 1e-5,
+                    epsilon: float = 1.0) -> SettledResponse:
     """Integrate eqs 129-132 (Cartesian form) for the batch to slow time ``T1``, accept the
     cases whose end state Newton-polishes to a nearby (within 5 %) stable fixed point of eqs
     136-139, and integrate the rest on to ``T1_max``; cases that still have not settled are
@@ -226,18 +235,20 @@ def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str =
     shape = sigma2.shape
     s2, si = sigma2.ravel(), sigma_i.ravel()
     run = integrate_combined(c, s2, si, a0.ravel(), v0.ravel(), psi0.ravel(), T1=T1,
-                             window=min(window, T1 / 2), policy=policy, coupled=coupled, rtol=rtol)
+                             window=min(window, T1 / 2), policy=policy, coupled=coupled, rtol=rtol,
+                             epsilon=epsilon)
     y = run.y_end.reshape(4, -1)
     out = {k: np.array(getattr(run, k)).ravel() for k in ("a_min", "a_max", "v_min", "v_max")}
-    ys, ok = _accept(c, y, s2, si, policy, coupled)
+    ys, ok = _accept(c, y, s2, si, policy, coupled, epsilon)
     todo = ~ok
     if np.any(todo):
         run2 = integrate_combined(c, s2[todo], si[todo], y0=y[:, todo], t0=T1, T1=T1_max,
-                                  window=window, policy=policy, coupled=coupled, rtol=rtol)
+                                  window=window, policy=policy, coupled=coupled, rtol=rtol,
+                                  epsilon=epsilon)
         y[:, todo] = run2.y_end
         for k in out:
             out[k][todo] = getattr(run2, k)
-        ys2, ok2 = _accept(c, run2.y_end, s2[todo], si[todo], policy, coupled)
+        ys2, ok2 = _accept(c, run2.y_end, s2[todo], si[todo], policy, coupled, epsilon)
         ys[:, todo] = ys2
         ok[todo] = ok2
     a = np.where(ok, np.hypot(ys[0], ys[1]), 0.5 * (out["a_min"] + out["a_max"]))
@@ -249,10 +260,10 @@ def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str =
                            r(out["v_max"]), r(ok), np.where(ok, ys, y).reshape((4,) + shape))
 
 
-def _accept(c, y, s2, si, policy, coupled, rel: float = 5e-2):
+def _accept(c, y, s2, si, policy, coupled, epsilon, rel: float = 5e-2):
     # A trajectory within a few per cent of a stable fixed point is in its basin (unless a
     # basin boundary passes that close), so the polished point is where it ends.
-    ys, conv, _, stable = polish_stationary(c, y, s2, si, policy, coupled)
+    ys, conv, _, stable = polish_stationary(c, y, s2, si, policy, coupled, epsilon=epsilon)
     scale = np.maximum(np.hypot(ys[0], ys[1]), 1e-4) + np.maximum(np.hypot(ys[2], ys[3]), 1e-5)
     near = np.max(np.abs(ys - y), axis=0) <= rel * scale
     return ys, conv & stable & near
@@ -305,7 +316,7 @@ def integrate_sprocket(c, Omega2, v0=0.0, T1: float = 600.0, window: float = 100
 
 
 def polish_stationary(c, y, sigma2, sigma_i, policy: str = "inertia", coupled: bool = True,
-                      iterations: int = 30, tol: float = 1e-12):
+                      iterations: int = 30, tol: float = 1e-12, epsilon: float = 1.0):
     """Newton's method on the stationary equations 136-139 (Cartesian form), batched, started
     from ``y`` (shape (4, ...)), with the eigenvalues of the Jacobian at the result.
 
@@ -314,7 +325,7 @@ def polish_stationary(c, y, sigma2, sigma_i, policy: str = "inertia", coupled: b
     y = np.array(y, float)
     shape = y.shape[1:]
     sigma2, sigma_i = (np.broadcast_to(np.asarray(x, float), shape).ravel() for x in (sigma2, sigma_i))
-    k = combined_coefficients(c, sigma_i, policy)
+    k = combined_coefficients(c, sigma_i, policy, epsilon)
     z = y.reshape(4, -1).copy()
     for _ in range(iterations):
         F = combined_rhs(z, k, sigma2, sigma_i, coupled)

@@ -99,7 +99,8 @@ def _combined(data: dict, path, key: str, sections_axis: str, sections, title: s
     if sections_axis == "sigma_i":
         idx = _nearest(si, sections)
         for j, st in zip(idx, styles):
-            ax0.plot(s2, Z[0, j], st, color="k", label=rf"$\sigma_i/\omega_m$ = {si[j]:.2f}")
+            ax0.plot(s2, Z[0, j], st, color="k", lw=1.2,
+                     label=rf"$\sigma_i/\omega_m$ = {si[j]:.2f}")
             for r in range(1, Z.shape[0]):
                 diff = np.abs(Z[r, j] - Z[0, j]) > 1e-3 * np.nanmax(Z)
                 ax0.plot(s2[diff], Z[r, j][diff], "o", mfc="none", ms=4, color="tab:red",
