@@ -88,7 +88,7 @@ class _Master:
 
     def close(self):
         self.fmu.terminate()
-        self.fmu.freeInstance()
+        self.fmu.fmi2FreeInstance(self.fmu.component)   # no dlclose: PythonFMU #228
 
 
 def adapter_cost(steps: int = 20000) -> float:

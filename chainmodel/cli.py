@@ -77,6 +77,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.cli", "register_wrap"),
     ("chainmodel.cli", "register_presets"),
     ("chainmodel.analysis.perturbation.cli", "register"),
+    ("chainmodel.analysis.tradeoff", "register"),
 ]
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 __all__ = ["Parameter", "PARAMETERS", "BY_NAME", "defaults", "validate", "FIDELITY_NAMES",
-           "fidelity_level"]
+           "fidelity_level", "markdown_table"]
 
 FIDELITY_NAMES = ("kinematic", "torsional", "modal", "multibody")
 
@@ -105,8 +105,9 @@ _ROLLER_RADIUS = 10.16e-3 / 2
 _SEAT_RADIUS = 0.505 * 10.16e-3  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
 
 PARAMETERS: tuple[Parameter, ...] = (
-    _p("fidelity", 0, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody",
-       kind=int, minimum=0, maximum=3),
+    _p("fidelity", 1, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody "
+       "(default 1: drivetrain torsional dynamics and span tensions at a fraction of level 3's "
+       "cost; docs/fidelity.md)", kind=int, minimum=0, maximum=3),
     # drive
     _p("drive.driver_teeth", 25, "", "teeth on the driver (input) sprocket, z1",
        kind=int, minimum=3, maximum=500),
@@ -249,3 +250,36 @@ def validate(values: Mapping[str, Any], base: Mapping[str, Any] | None = None) -
             f"chain by 5 % or more; use less than {0.05 * out['chain.link_stiffness'] * out['drive.pitch']:g} N")
     return out
 
+
+
+def markdown_table() -> str:
+    """The schema as a Markdown table (docs/parameters.md is generated from it)."""
+    def fmt(p: Parameter) -> str:
+        v = p.default
+        if p.kind is float:
+            return f"{v:g}"
+        return str(v).lower() if p.kind is bool else str(v)
+
+    def rng(p: Parameter) -> str:
+        if p.choices:
+            return ", ".join(p.choices)
+        if p.kind is bool:
+            return "true, false"
+        lo = "" if p.minimum is None else f"{'>' if p.exclusive_minimum else '>='} {p.minimum:g}"
+        hi = "" if p.maximum is None else f"<= {p.maximum:g}"
+        return " and ".join(x for x in (lo, hi) if x) or "any finite"
+
+    lines = ["| name | default | unit | valid | levels | description |",
+             "|---|---|---|---|---|---|"]
+    for p in PARAMETERS:
+        levels = ", ".join(str(k) for k in p.levels)
+        unit = p.unit or "-"
+        if p.display_unit:
+            unit += f" (shown in {p.display_unit})"
+        lines.append(f"| `{p.name}` | {fmt(p)} | {unit} | {rng(p)} | {levels} | "
+                     f"{p.description.replace('|', '/')} |")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":  # pragma: no cover
+    print(markdown_table(), end="")

@@ -73,7 +73,10 @@ class Slave:
         return " | ".join(m for _, m in self.log.messages)
 
     def free(self):
-        self.fmu.freeInstance()
+        # free the instance but never dlclose pythonfmu's wrapper in a live Python: it corrupts
+        # the heap at interpreter exit now and then (PythonFMU #228; see tests/conftest.py)
+        self.fmu.fmi2FreeInstance(self.fmu.component)
+        self.fmu.component = None
 
 
 def library_outputs(model, t, x, u):
@@ -278,7 +281,8 @@ def test_fmpy_simulate_fmu_equals_library(chaindrive_fmu):
                      dtype=[("time", float)] + [(name, float) for name in INPUTS])
     res = fmpy_simulate(str(chaindrive_fmu), fmi_type="CoSimulation", start_time=0.0,
                         stop_time=n * h, output_interval=h, input=table, output=OUTPUTS,
-                        start_values={"chain.pretension": scene.parameters["chain.pretension"]})
+                        start_values={"chain.pretension": scene.parameters["chain.pretension"],
+                                      "fidelity": 0})
     assert len(res) == n + 1
     stepper = scene.stepper()
     prev = None
@@ -483,6 +487,7 @@ VENDORED_CHECK = textwrap.dedent(r"""
     fmu.instantiate()
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
+    fmu.setInteger([vr["fidelity"]], [0])
     fmu.setReal([vr["input_shaft.angle"], vr["input_shaft.speed"], vr["load.torque"]],
                 [0.3, 10.0, 20.0])
     fmu.exitInitializationMode()
@@ -490,7 +495,7 @@ VENDORED_CHECK = textwrap.dedent(r"""
     out = dict(zip(["driver.angle", "driver.speed", "driven.speed"],
                    fmu.getReal([vr["driver.angle"], vr["driver.speed"], vr["driven.speed"]])))
     fmu.terminate()
-    fmu.freeInstance()
+    fmu.fmi2FreeInstance(fmu.component)   # no dlclose: PythonFMU #228 (see conftest.py)
     vendored = [m for m in sys.modules if m.startswith("_chaindrive_fmu_")]
     print(json.dumps({"out": out, "blocked": blocked,
                       "chainmodel_file": sys.modules["chainmodel"].__file__,
