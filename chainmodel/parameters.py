@@ -181,10 +181,11 @@ PARAMETERS: tuple[Parameter, ...] = (
        "pitch radius, each span as a bar moving with its endpoints (consistent mass matrix); "
        "off gives seed 004 eq 50 exactly (docs/reduced_models.md)", kind=bool, levels=(1, 2)),
     _p("torsional.seat_compliance", True, "",
-       "put the seated rollers' contact compliance in series with each span at levels 1-2: "
+       "put the seated rollers' contact compliance in series with each span at levels 0-2 "
+       "(level 0: in its static tension only): "
        "each span end adds 1/K_seat, K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (a ladder "
        "of seat springs contact.stiffness and links), plus the roller-seat clearance "
-       "(docs/reduced_models.md)", kind=bool, levels=(1, 2)),
+       "(docs/reduced_models.md)", kind=bool, levels=(0, 1, 2)),
     _p("torsional.mean_link_compliance", True, "",
        "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
        "tooth-period-mean link count n, while its stretch follows the current count: the tension "

@@ -233,14 +233,28 @@ class Scene:
         from .models.kinematic import static_span_tension
         tension = check_positive("static_tension", tension, allow_zero=True)
         params = dict(self.parameters, **{"chain.pretension": 0.0})
-        geometric = static_span_tension(self.drive_for(params), params)
+        drive = self.drive_for(params)
+        geometric = static_span_tension(drive, params)
         if tension < geometric - 1e-9:
             raise ValueError(f"static_tension {tension:g} N is below the {geometric:.4g} N the "
                              "centre distance already gives; shorten drive.centre_distance")
-        params["chain.pretension"] = tension - geometric
+        # T is affine in the pre-strain tension while it is positive (slope 1 with rigid seats,
+        # less with seat compliance): solve it from a probe well inside the positive range.
+        probe = tension + 1000.0
+        slope = (static_span_tension(drive, dict(params, **{"chain.pretension": probe}))
+                 - geometric) / probe if geometric > 0 else None
+        if slope is None or slope <= 0:
+            hi = dict(params, **{"chain.pretension": 2 * probe})
+            t_hi = static_span_tension(drive, hi)
+            t_lo = static_span_tension(drive, dict(params, **{"chain.pretension": probe}))
+            slope = (t_hi - t_lo) / probe
+            pre = probe + (tension - t_lo) / slope
+        else:
+            pre = (tension - geometric) / slope
+        params["chain.pretension"] = max(0.0, pre)
         return Scene(self.name, params, self.operating, self.duration, self.output_interval,
-                     self.notes + [f"chain.pretension = {tension - geometric:.4g} N for a static "
-                                   f"span tension of {tension:g} N"])
+                     self.notes + [f"chain.pretension = {params['chain.pretension']:.4g} N for a "
+                                   f"static span tension of {tension:g} N"])
 
     # --- derived ---------------------------------------------------------------------------
     @property

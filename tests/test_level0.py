@@ -144,8 +144,19 @@ def test_symmetric_drive_unloaded_tensions_equal_static_tension():
     pretension alone."""
     d = Drive(12, 12, INCH, 16, 0.0, links=46)
     m = _model(d, **{"driver.inertia": 0.0, "driven.inertia": 0.0, "driven.damping": 0.0,
-                     "chain.pretension": 800.0})
+                     "chain.pretension": 800.0, "torsional.seat_compliance": False})
     assert m.static_tension() == pytest.approx(800.0, rel=1e-9)
+    # with the seats' ladder compliance and clearance in series (docs/reduced_models.md):
+    # the pre-strain stretch X = 800 n / k_l is shared with two seat compliances 2/K per span
+    # and reduced by two clearances per span; n = 2 (N + 1) = 34 span links here
+    p = defaults()
+    k_l, k_c = p["chain.link_stiffness"], p["contact.stiffness"]
+    k_seat = (k_c + math.sqrt(k_c**2 + 4 * k_c * k_l)) / 2
+    gap = p["contact.seat_radius"] - p["chain.roller_radius"]
+    flex = 34 / k_l
+    expected = (800.0 * flex - 2 * 2 * gap) / (flex + 2 * 2 / k_seat)
+    soft = _model(d, **{"chain.pretension": 800.0, "torsional.seat_compliance": True})
+    assert soft.static_tension() == pytest.approx(expected, rel=1e-9)
     angle = np.linspace(-1, 1, 101)
     for speed, accel in ((10.0, 0.0), (10.0, 50.0), (-10.0, -50.0)):
         out = m.evaluate(angle, speed, accel, 0.0)
@@ -209,6 +220,7 @@ def test_static_tension_from_span_stretch():
     d = Drive(12, 12, INCH, 16, 0.001, links=46)
     p = defaults()
     p["chain.pretension"] = 100.0
+    p["torsional.seat_compliance"] = False       # rigid seats, as stated
     k = p["chain.link_stiffness"]
     assert static_span_tension(d, p) == pytest.approx(100.0 + k * 2 * 0.001 * INCH / 34,
                                                       rel=1e-6)
@@ -220,6 +232,7 @@ def test_static_tension_c1_within_table1_bounds():
     row = next(r for r in reference_table("wrap_length_jsv2016_table1.csv") if r["id"] == "C1")
     d = chainmodel.preset("C1")
     p = defaults()
+    p["torsional.seat_compliance"] = False       # the rigid-seat bound
     k = p["chain.link_stiffness"]
     phi = np.linspace(0, 2 * math.pi / d.n_driver, 100, endpoint=False)
     g = K.chain_geometry(d, phi, K.driven_rotation(d, phi).driven_angle)

@@ -22,6 +22,7 @@ it is zero and the other carries the whole torque.
 
 from __future__ import annotations
 
+import math
 from functools import cached_property
 from typing import Any, Mapping
 
@@ -32,16 +33,43 @@ from ..kinematics import driven_rotation
 from ..kinematics.wrapping import chain_geometry, tooth_period_samples
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, quasi_static_extras)
 
-__all__ = ["KinematicModel", "static_span_tension", "split_tensions"]
+__all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stiffness",
+           "seat_series_compliance"]
+
+
+def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
+    """Stiffness with which the chain wrapped on a sprocket holds a span end [N/m].
+
+    The span's endpoint roller sits on a seat spring k_c and is tied by a link k_l to the next
+    seated roller, which sits on its own seat spring and so on: a ladder whose input stiffness K
+    satisfies K = k_c + k_l K / (k_l + K), i.e. K = (k_c + sqrt(k_c^2 + 4 k_c k_l)) / 2
+    (docs/reduced_models.md, "equivalent series stiffness")."""
+    kc, kl = float(contact_stiffness), float(link_stiffness)
+    return 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
+
+
+def seat_series_compliance(params: Mapping[str, Any]) -> tuple[float, float]:
+    """(extra compliance per span [m/N], extra free length per span [m]) of the seats when
+    ``torsional.seat_compliance`` is on: two span ends, each 1/K_seat (:func:`seat_stiffness`),
+    and the roller-seat clearance R_t - R_r taken up towards the span at each. (0, 0) with
+    rigid seats."""
+    if not params["torsional.seat_compliance"]:
+        return 0.0, 0.0
+    k_seat = seat_stiffness(params["contact.stiffness"], params["chain.link_stiffness"])
+    clearance = max(0.0, params["contact.seat_radius"] - params["chain.roller_radius"])
+    return 2.0 / k_seat, 2.0 * clearance
 
 
 def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
-    """Static span tension at rest, no load, with rigid seats [N].
+    """Static span tension at rest, no load [N] (levels 0-2).
 
-    At rest the free driven sprocket turns until both spans carry the same tension. Only the
-    span links stretch (seated rollers sit in rigid seats), so the centre distance's excess
-    wrapping length L - M p spreads over the n_u + n_l span links:
+    At rest the free driven sprocket turns until both spans carry the same tension. With rigid
+    seats only the span links stretch, so the centre distance's excess wrapping length L - M p
+    spreads over the n_u + n_l span links:
     T0 = pretension + k_link * <(L - M p) / (n_u + n_l)> over a tooth period, and >= 0.
+    With ``torsional.seat_compliance`` the same stretch X = T0 (n_u + n_l) / k_link is shared
+    with the four seat compliances c and reduced by the four clearances s
+    (:func:`seat_series_compliance`): T = (X - 2 s) / ((n_u + n_l) / k_link + 2 c), >= 0.
     """
     pre = params["chain.pretension"]
     if drive.links is None:
@@ -49,8 +77,14 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     phi1 = tooth_period_samples(drive, 100)
     phi2 = driven_rotation(drive, phi1).driven_angle
     g = chain_geometry(drive, phi1, phi2)
-    stretch = (g.wrap_length - drive.links * drive.pitch) / (g.upper_links + g.lower_links)
-    return max(0.0, pre + params["chain.link_stiffness"] * float(np.mean(stretch)))
+    links = g.upper_links + g.lower_links
+    stretch = (g.wrap_length - drive.links * drive.pitch) / links
+    t0 = max(0.0, pre + params["chain.link_stiffness"] * float(np.mean(stretch)))
+    c, slack = seat_series_compliance(params)
+    if c == 0.0 and slack == 0.0:
+        return t0
+    flex = float(np.mean(links)) / params["chain.link_stiffness"]
+    return max(0.0, (t0 * flex - 2.0 * slack) / (flex + 2.0 * c))
 
 
 def split_tensions(sum_tension, arm_pull, arm_back, torque):

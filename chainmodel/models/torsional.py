@@ -46,7 +46,7 @@ from ..kinematics.wrapping import chain_geometry, tooth_period_samples
 from . import spans as S
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
                    quasi_static_extras)
-from .kinematic import static_span_tension
+from .kinematic import seat_series_compliance, seat_stiffness, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -54,17 +54,6 @@ __all__ = ["TorsionalModel", "seat_stiffness"]
 SWITCH_NAMES = ("upper span slack", "lower span slack", "release from driven (upper span)",
                 "seating on driver (upper span)", "release from driver (lower span)",
                 "seating on driven (lower span)")
-
-
-def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
-    """Stiffness with which the chain wrapped on a sprocket holds a span end [N/m].
-
-    The span's endpoint roller sits on a seat spring k_c and is tied by a link k_l to the next
-    seated roller, which sits on its own seat spring and so on: a ladder whose input stiffness K
-    satisfies K = k_c + k_l K / (k_l + K), i.e. K = (k_c + sqrt(k_c^2 + 4 k_c k_l)) / 2
-    (docs/reduced_models.md, "equivalent series stiffness")."""
-    kc, kl = float(contact_stiffness), float(link_stiffness)
-    return 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
 
 
 class TorsionalModel(Model):
@@ -136,14 +125,9 @@ class TorsionalModel(Model):
 
     def series_compliance(self) -> tuple[float, float]:
         """(extra compliance per span [m/N], extra free length per span [m]) from the seats
-        (option ``torsional.seat_compliance``): two ends, each 1/K_seat and the roller-seat
-        clearance R_t - R_r taken up towards the span."""
-        p = self.params
-        if not p["torsional.seat_compliance"]:
-            return 0.0, 0.0
-        k_seat = seat_stiffness(p["contact.stiffness"], p["chain.link_stiffness"])
-        clearance = max(0.0, p["contact.seat_radius"] - p["chain.roller_radius"])
-        return 2.0 / k_seat, 2.0 * clearance
+        (option ``torsional.seat_compliance``; :func:`~chainmodel.models.kinematic.
+        seat_series_compliance`)."""
+        return seat_series_compliance(self.params)
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -294,19 +278,9 @@ class TorsionalModel(Model):
 
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
-        """Static span tension at rest with no load [N]: the rigid-seat value of level 0
-        (:func:`~chainmodel.models.kinematic.static_span_tension`); with
-        ``torsional.seat_compliance`` the same total stretch X = T0 (n_u + n_l) / k_link is shared
-        with the four seat compliances and reduced by the four clearances:
-        T = (X - 2 s) / ((n_u + n_l) / k_link + 2 c), c and s per span (:meth:`series_compliance`).
-        """
-        t0 = static_span_tension(self.drive, self.params)
-        c, slack = self.series_compliance()
-        if c == 0.0 and slack == 0.0:
-            return t0
-        r = self.reference
-        flex = (r["n_up"] + r["n_low"]) / self.params["chain.link_stiffness"]
-        return max(0.0, (t0 * flex - 2.0 * slack) / (flex + 2.0 * c))
+        """Static span tension at rest with no load [N], shared with level 0
+        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included)."""
+        return static_span_tension(self.drive, self.params)
 
     def stiffness_bound(self) -> np.ndarray:
         """Linear stiffness matrix of the sprocket rotations with both spans taut, their
