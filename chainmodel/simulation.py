@@ -92,9 +92,10 @@ class _Progress:
             self.last = now
             frac = t / self.total if self.total else 1.0
             elapsed = now - self.start
-            eta = elapsed * (1 - frac) / frac if frac > 0 else math.nan
+            # no estimate before 5 %: one-off start-up costs (compilation) would dominate it
+            eta = f", ~{elapsed * (1 - frac) / frac:.0f} s left" if frac >= 0.05 else ""
             sys.stderr.write(f"\r{self.label}: t = {t:.4g} / {self.total:.4g} s "
-                             f"({100 * frac:5.1f} %), {elapsed:.1f} s elapsed, ~{eta:.0f} s left ")
+                             f"({100 * frac:5.1f} %), {elapsed:.1f} s elapsed{eta} ")
             sys.stderr.flush()
 
     def close(self):
