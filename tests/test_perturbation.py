@@ -373,8 +373,9 @@ def test_combined_section_minus_1_9_is_the_decoupled_bent_peak(c, sections):
 
 def test_combined_upright_peak_on_the_diagonal_separated_below_minus_1_1(c, sections):
     """An upright peak at sigma_i = sigma2, separated from the bent peak by a gap where a = 0
-    for sigma_i/omega_m <= -1.1."""
-    for si, gap in ((-1.9, (-1.6, -0.5)), (-1.1, (-0.8, -0.6))):
+    for sigma_i/omega_m <= -1.1 (at -1.1 the gap also holds small modulated responses from some
+    starts near sigma2/omega_m = -0.65 ... -0.5, off this 0.1 grid; docs/perturbation.md)."""
+    for si, gap in ((-1.9, (-1.6, -0.5)), (-1.1, (-0.85, -0.7))):
         assert _a(sections, si, si) > 0.01
         s2, out = sections
         a = out[si][0, 0]
@@ -471,3 +472,12 @@ def test_cli_rejects_bad_parameter(capsys):
                                  "--param", "P_tot=-3"])
     with pytest.raises(ValueError, match="P_tot"):
         args.handler(args)
+
+
+def test_cli_registered_in_chainmodel_main(capsys):
+    from chainmodel.cli import main
+    assert main(["frequency-response", "--case", "sprocket", "--points", "11", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["case"] == "sprocket" and out["coefficients"]["P_t"] == 500.0
+    assert main(["frequency-response", "--case", "parametric", "--param", "mu_m=-1"]) == 2
+    assert "mu_m" in capsys.readouterr().err

@@ -202,7 +202,7 @@ class Coefficients:
     def table(self) -> list[tuple[str, float, str, str, str]]:
         """(symbol, value, unit, equation, meaning) rows, for docs and the CLI."""
         return [
-            ("l", self.length, "m", "26", "length unit |OC| (centre distance)"),
+            ("l", self.length, "m", "26", "length unit: centre distance OC"),
             ("R1", self.R1, "m", "51", "driven pitch radius"),
             ("R2", self.R2, "m", "51", "driver pitch radius"),
             ("S", self.chain_speed, "m/s", "17", "mean chain speed n_c p rpm/60"),

@@ -47,7 +47,7 @@ def plot_parametric(data: dict, path, extra: list[tuple[str, dict]] = ()) -> Pat
     100-101 integrated from random starts)."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    curves = [("Table 2", data)] + list(extra)
+    curves = [("eq 105 (solid stable, dashed unstable)", data)] + list(extra)
     colors = ["k", "tab:blue", "tab:red", "tab:green"]
     for k, ((label, d), col) in enumerate(zip(curves, colors)):
         x = d["ratio"]
