@@ -122,7 +122,7 @@ def run_frequency_response(args) -> int:
                                                     columns.items()}, {}))
     if args.plot:
         from .plots import plot_case
-        written.extend(plot_case(args.case, data, args.plot))
+        written.extend(plot_case(args.case, data, args.plot, _variants(args, drive, c)))
     if args.json:
         print_json({"case": args.case, "drive": drive_dict(drive),
                     "speed_rpm": args.speed_rpm, "coefficients": _coef_dict(c),
@@ -137,6 +137,25 @@ def run_frequency_response(args) -> int:
     for w in written:
         print(f"wrote {w}")
     return 0
+
+
+def _variants(args, drive, c) -> list:
+    """Closed-form curves drawn beside the main one, as the paper discusses them: a doubled
+    driver amplitude (Fig 6: the peak widens) and doubled/quadrupled sprocket damping (Fig 7:
+    the peak drops)."""
+    from . import coefficients, response
+    base = dict(c.params)
+
+    def coef(**change):
+        return coefficients(drive, {**base, **change}, args.speed_rpm, P_t=c.P_t, mode=c.mode)
+
+    if args.case == "parametric":
+        return [(r"$2\theta_2^*$", response.parametric_response(
+            coef(theta2_star=2 * base["theta2_star"]), initial_conditions=0))]
+    if args.case == "sprocket":
+        return [(rf"$\mu_\theta$ = {k * base['mu_theta']:g}", response.sprocket_response(
+            coef(mu_theta=k * base["mu_theta"]), numerical_ratio=[])) for k in (2, 4)]
+    return []
 
 
 def _coef_dict(c) -> dict:

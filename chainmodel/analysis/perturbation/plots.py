@@ -149,14 +149,14 @@ def plot_combined_sprocket(data: dict, path, sections=(-0.9, -0.5, 0.0)) -> Path
                      f"(eqs 129-132, policy '{data['policy']}')", r"$v$")
 
 
-def plot_case(case: str, data: dict, path) -> list[Path]:
+def plot_case(case: str, data: dict, path, extra=()) -> list[Path]:
     """The figure(s) of one CLI case; the combined case writes <stem>_span and
-    <stem>_sprocket next to ``path``."""
+    <stem>_sprocket next to ``path``. ``extra``: (label, data) of further curves."""
     path = Path(path)
     if case == "parametric":
-        return [plot_parametric(data, path)]
+        return [plot_parametric(data, path, list(extra))]
     if case == "sprocket":
-        return [plot_sprocket(data, path)]
+        return [plot_sprocket(data, path, list(extra))]
     stem, suffix = path.with_suffix(""), path.suffix or ".png"
     return [plot_combined_span(data, f"{stem}_span{suffix}"),
             plot_combined_sprocket(data, f"{stem}_sprocket{suffix}")]
