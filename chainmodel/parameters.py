@@ -85,15 +85,26 @@ class Parameter:
             raise ValueError(f"parameter {name} must be{self._range()} [{self.unit or '-'}], got {value!r}")
         return value
 
-    def _range(self) -> str:
+    def valid_text(self) -> str:
+        """What values are valid, for messages and docs: 'one of a, b', '> 0', '[0, 1]', or ''
+        when any finite value is."""
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
         lo, hi = self.minimum, self.maximum
         if lo is None and hi is None:
             return ""
         if hi is None:
-            return f" {'>' if self.exclusive_minimum else '>='} {lo:g}"
+            return f"{'>' if self.exclusive_minimum else '>='} {lo:g}"
         if lo is None:
-            return f" <= {hi:g}"
-        return f" in {'(' if self.exclusive_minimum else '['}{lo:g}, {hi:g}]"
+            return f"<= {hi:g}"
+        return f"{'(' if self.exclusive_minimum else '['}{lo:g}, {hi:g}]"
+
+    def _range(self) -> str:
+        text = self.valid_text()
+        if not text:
+            return ""
+        both = self.minimum is not None and self.maximum is not None
+        return (" in " if both else " ") + text
 
 
 def _p(*args, **kw) -> Parameter:
@@ -262,13 +273,9 @@ def markdown_table() -> str:
         return str(v).lower() if p.kind is bool else str(v)
 
     def rng(p: Parameter) -> str:
-        if p.choices:
-            return ", ".join(p.choices)
         if p.kind is bool:
             return "true, false"
-        lo = "" if p.minimum is None else f"{'>' if p.exclusive_minimum else '>='} {p.minimum:g}"
-        hi = "" if p.maximum is None else f"<= {p.maximum:g}"
-        return " and ".join(x for x in (lo, hi) if x) or "any finite"
+        return p.valid_text() or "any finite"
 
     lines = ["| name | default | unit | valid | levels | description |",
              "|---|---|---|---|---|---|"]

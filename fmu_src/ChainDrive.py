@@ -113,23 +113,10 @@ def _why(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def _range_text(p) -> str:
-    if p.choices:
-        return "one of " + ", ".join(p.choices)
-    lo, hi = p.minimum, p.maximum
-    if lo is None and hi is None:
-        return ""
-    if hi is None:
-        return f"{'>' if p.exclusive_minimum else '>='} {lo:g}"
-    if lo is None:
-        return f"<= {hi:g}"
-    return f"{'(' if p.exclusive_minimum else '['}{lo:g}, {hi:g}]"
-
-
 def parameter_description(p) -> str:
     """FMI description of a schema parameter: meaning, valid range, levels that use it."""
     text = p.description
-    rng = _range_text(p)
+    rng = p.valid_text()
     if rng:
         text += f"; valid: {rng}"
     if tuple(p.levels) != (0, 1, 2, 3):
