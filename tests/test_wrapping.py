@@ -67,7 +67,7 @@ def test_table1_wrap_length(row):
 def test_table1_b2_length_constant():
     """Seed 004 section 3: for B2 (n_c = n_o, f ~ 0) the wrapping length does not vary."""
     d = chainmodel.preset("B2")
-    L = K.wrap_length(d, np.linspace(0, 2 * math.pi / d.n_driver, 300))
+    L = K.wrap_length(d, driver_angle=np.linspace(0, 2 * math.pi / d.n_driver, 300))
     assert np.ptp(L) / d.pitch < 1e-6
 
 
@@ -84,7 +84,7 @@ def test_wrap_length_is_the_hull_perimeter(name):
     d = chainmodel.preset(name)
     phi = np.random.default_rng(3).uniform(-1.0, 7.0, 25)
     phi2 = K.driven_rotation(d, phi).driven_angle
-    L = K.wrap_length(d, phi)
+    L = K.wrap_length(d, driver_angle=phi)
     ref = np.array([hull_reference(d, a, b)[0] for a, b in zip(phi, phi2)])
     np.testing.assert_allclose(L, ref, rtol=1e-13)
 
@@ -150,11 +150,11 @@ def test_wrap_length_continuous_across_events(name):
     psi = K.seating(d).theta4 - K.release(d).theta4
     for event in (P, psi + P):
         for eps in (1e-6, 1e-9, 1e-12):
-            L = K.wrap_length(d, np.array([event - eps, event + eps]))
+            L = K.wrap_length(d, driver_angle=np.array([event - eps, event + eps]))
             assert abs(L[1] - L[0]) < 10 * eps * d.driver.pitch_radius
     # nor anywhere else: steps bounded by the largest sprocket radius times the driver step
     phi = np.linspace(0, 3 * P, 3001)
-    L = K.wrap_length(d, phi)
+    L = K.wrap_length(d, driver_angle=phi)
     assert np.max(np.abs(np.diff(L))) < 2 * max(d.driver.pitch_radius, d.driven.pitch_radius) \
         * (phi[1] - phi[0])
 
@@ -181,7 +181,7 @@ def test_wrap_length_theta4_argument():
     d = chainmodel.preset("C1")
     s = K.seating(d)
     phi = np.linspace(0.01, 0.5, 7)
-    np.testing.assert_allclose(K.wrap_length(d, theta4=s.theta4 - phi), K.wrap_length(d, phi),
+    np.testing.assert_allclose(K.wrap_length(d, theta4=s.theta4 - phi), K.wrap_length(d, driver_angle=phi),
                                rtol=1e-14)
 
 
@@ -205,7 +205,7 @@ def test_roller_positions(name):
         assert long_links.sum() in (0, n_low)
         if long_links.any():
             np.testing.assert_allclose(link[long_links], g.lower.length[0] / n_low, rtol=1e-12)
-        assert np.sum(link) == pytest.approx(float(K.wrap_length(d, phi1)), rel=1e-13)
+        assert np.sum(link) == pytest.approx(float(K.wrap_length(d, driver_angle=phi1)), rel=1e-13)
         on_c = np.abs(np.abs(z - complex(d.x_c, d.y_c)) - d.driver.pitch_radius) < 1e-12
         on_o = np.abs(np.abs(z) - d.driven.pitch_radius) < 1e-12
         assert on_c.sum() >= int(g.wrapped_driver[0]) + 1
@@ -220,9 +220,9 @@ def test_roller_positions_tight_chain_all_links_one_pitch():
     d = Drive.from_links(12, 18, INCH, 40)
     P = 2 * math.pi / d.n_driver
     phi = np.linspace(0, P, 2001)
-    i = int(np.argmin(K.wrap_length(d, phi)))
+    i = int(np.argmin(K.wrap_length(d, driver_angle=phi)))
     from scipy.optimize import minimize_scalar
-    res = minimize_scalar(lambda x: float(K.wrap_length(d, np.array([x]))[0]),
+    res = minimize_scalar(lambda x: float(K.wrap_length(d, driver_angle=np.array([x]))[0]),
                           bounds=(phi[max(i - 1, 0)], phi[min(i + 1, phi.size - 1)]),
                           method="bounded", options={"xatol": 1e-12})
     phi1 = res.x
@@ -242,3 +242,16 @@ def test_from_links_tight_at_max():
 def test_roller_positions_needs_links():
     with pytest.raises(ValueError, match="links"):
         K.roller_positions(chainmodel.preset("medium", links=None), 0.0, 0.0)
+
+
+def test_design_positional_form_takes_theta4():
+    """DESIGN.md's public interface: kinematics.wrap_length(drive, theta4) - the paper's
+    contact angle, one tooth period from seating (theta4s) down; equal to the driver-rotation
+    form at phi = theta4s - theta4."""
+    d = chainmodel.preset("C1")
+    s = K.seating(d)
+    phi = np.linspace(0, 2 * math.pi / d.n_driver, 50, endpoint=False)
+    np.testing.assert_allclose(K.wrap_length(d, s.theta4 - phi), K.wrap_length(d, driver_angle=phi),
+                               rtol=1e-14)
+    with pytest.raises(ValueError, match="not both"):
+        K.wrap_length(d, s.theta4, driver_angle=0.0)

@@ -188,12 +188,16 @@ def tooth_period_samples(drive: Drive, samples: int = 400) -> np.ndarray:
     return np.arange(samples) * (2 * math.pi / drive.n_driver / samples)
 
 
-def wrap_length(drive: Drive, driver_angle=None, theta4=None) -> np.ndarray:
+def wrap_length(drive: Drive, theta4=None, *, driver_angle=None) -> np.ndarray:
     """Total wrapping length L [m] (seed 004 eq 13) with the tight span straight and rigid.
 
-    Give either the driver rotation ``driver_angle`` (forward positive, 0 at seating) or the
-    paper's contact angle ``theta4``; defaults to 400 samples over one tooth period.
+    Give either the paper's driver contact angle ``theta4`` (as DESIGN.md's
+    ``kinematics.wrap_length(drive, theta4)``) or, by keyword, the driver rotation
+    ``driver_angle`` (forward positive, 0 at seating); with neither, 400 samples over one tooth
+    period.
     """
+    if theta4 is not None and driver_angle is not None:
+        raise ValueError("give theta4 or driver_angle, not both")
     if theta4 is not None:
         s = fb.seating(drive)
         driver_angle = s.theta4 - fb.in_period(drive, theta4)
@@ -220,9 +224,9 @@ def wrap_length_range(drive: Drive, samples: int = 200) -> tuple[float, float, f
     """(L_min, L_mean, L_max) over one tooth period [m]; min and max refined beyond the samples,
     the mean from ``samples`` evenly spaced driver angles (seed 004 Table 1 used about 100)."""
     period = 2 * math.pi / drive.n_driver
-    lmin, _ = _min_over_period(lambda v: wrap_length(drive, v), period, samples)
-    lmax, _ = _min_over_period(lambda v: -wrap_length(drive, v), period, samples)
-    mean = float(np.mean(wrap_length(drive, tooth_period_samples(drive, samples))))
+    lmin, _ = _min_over_period(lambda v: wrap_length(drive, driver_angle=v), period, samples)
+    lmax, _ = _min_over_period(lambda v: -wrap_length(drive, driver_angle=v), period, samples)
+    mean = float(np.mean(wrap_length(drive, driver_angle=tooth_period_samples(drive, samples))))
     return lmin, mean, -lmax
 
 
