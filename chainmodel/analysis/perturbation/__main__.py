@@ -12,7 +12,7 @@ import sys
 
 
 def main(argv=None) -> int:
-    from chainmodel.presets import preset
+    from ...presets import preset
     from .cli import _params, _reference
     from .coefficients import coefficients, internal_resonance_check
 

@@ -16,7 +16,7 @@ CASES = ("parametric", "sprocket", "combined")
 
 
 def register(subparsers) -> None:
-    from chainmodel.cli import add_drive_arguments, add_output_arguments
+    from ...cli import add_drive_arguments, add_output_arguments
     p = subparsers.add_parser(
         "frequency-response",
         help="multiple-scales frequency response of seed 004 (Figs 6-9)",
@@ -73,7 +73,7 @@ def _reference(text: str):
 
 def run_frequency_response(args) -> int:
     import numpy as np
-    from chainmodel.cli import drive_dict, drive_from_args, print_json, write_csv_columns
+    from ...cli import drive_dict, drive_from_args, print_json, write_csv_columns
     from . import coefficients, response
 
     drive_flags = ("preset", "driver_teeth", "driven_teeth", "span_pitches", "pitch_fraction",

@@ -55,7 +55,7 @@ _P_T_CHOICES = ("pretension", "tight", "total")
 
 def table2() -> dict[str, float]:
     """Seed 004 Table 2 as a dict (a fresh copy)."""
-    from chainmodel.presets import reference_values
+    from ...presets import reference_values
     return dict(reference_values(TABLE2))
 
 
