@@ -153,9 +153,3 @@ def iso606(name: str) -> ChainSize:
     if name not in ISO606:
         raise ValueError(f"unknown ISO 606 chain {name!r}; choose one of: {', '.join(ISO606)}")
     return ISO606[name]
-
-
-def chain_for_pitch(pitch: float) -> ChainSize:
-    """The B-series ISO 606 chain of this pitch (falls back to the nearest pitch)."""
-    b = [c for c in ISO606.values() if c.name.endswith("B")]
-    return min(b, key=lambda c: (abs(c.pitch - pitch), c.name))

@@ -133,3 +133,16 @@ def test_simulate_rejects_bad_durations():
         chainmodel.simulate("xu2010", fidelity=0, duration=-1.0)
     with pytest.raises(ValueError, match="output_interval"):
         Scene("x", {}, duration=0.1, output_interval=0.2)
+
+
+def test_iso606_chain_and_seat_radius_limits():
+    """ISO 606 10B (the xu2010 chain): pitch 15.875 mm, roller 10.16 mm; seating-curve radius
+    limits 0.505 d1 and 0.505 d1 + 0.069 d1^(1/3) (d1 in mm)."""
+    from chainmodel.presets import iso606
+    c = iso606("10B")
+    assert c.pitch == pytest.approx(15.875e-3) and c.roller_radius == pytest.approx(5.08e-3)
+    lo, hi = c.seat_radius_range()
+    assert lo == pytest.approx(0.505 * 10.16e-3)
+    assert hi == pytest.approx((0.505 * 10.16 + 0.069 * 10.16 ** (1 / 3)) * 1e-3)
+    with pytest.raises(ValueError, match="10B"):
+        iso606("99Z")
