@@ -96,6 +96,15 @@ class Stepper(ABC):
                                      f"{', '.join(bad[:5])} at t = {self.t:.6g} s")
         return out
 
+    def advance_batch(self, times, angle, speed, acceleration, torque) -> np.ndarray | None:
+        """Integrate through the communication points ``times`` (``times[0]`` the current time)
+        in one call, the inputs given there as arrays (the source's values: angle, speed,
+        acceleration, torque); the states at every point, as ``advance`` would leave them one
+        point at a time, or None when this stepper and model have no such path (then call
+        ``advance`` per point). Raises SimulationDiverged as ``advance`` does; outputs are the
+        caller's (e.g. the model's vectorised ``outputs_many``)."""
+        return None
+
     def outputs(self) -> dict[str, float]:
         """Outputs at the current time and inputs."""
         return self.model.outputs(self.t, self.x, self.inputs)
@@ -204,6 +213,34 @@ class FixedStepper(Stepper):
                 self.x = x
                 self.model.check(t, x)
         self.x = x
+
+    def advance_batch(self, times, angle, speed, acceleration, torque):
+        fast = getattr(self.model, "advance_compiled_many", None) if self.compiled else None
+        times = np.asarray(times, float)
+        if fast is None or times.size < 2 or self.model.n_states == 0:
+            return None
+        if abs(times[0] - self.t) > 1e-12 * max(1.0, abs(self.t)) or np.any(np.diff(times) <= 0):
+            raise ValueError("advance_batch needs increasing times starting at the current "
+                             f"time {self.t!r} s")
+        wall = time.perf_counter()
+        res = fast(self.method, times, self.x, self.h, angle, speed, acceleration, torque)
+        if res is None:
+            return None
+        states, reached, steps, events, evals, log = res
+        self.stats["steps"] += steps
+        self.stats["events"] += events
+        self.stats["rhs_evaluations"] += evals
+        self.event_log.extend(log)
+        self.model.check_states(times[1:reached + 1], states[1:reached + 1])
+        if reached < times.size - 1:  # pragma: no cover - check_states raises first
+            raise SimulationDiverged(f"{self.model.name} model diverged at "
+                                     f"t = {times[reached]:.6g} s (non-finite state)")
+        self.t = float(times[-1])
+        self.x = states[-1].copy()
+        self.inputs = Inputs(float(angle[-1]), float(speed[-1]), float(torque[-1]),
+                             float(acceleration[-1]))
+        self.stats["wall_time"] += time.perf_counter() - wall
+        return states
 
     def _bisect(self, t, x, h, g0, source, tol=1e-12):
         """Largest sub-step before the first sign change; returns the state just past it.

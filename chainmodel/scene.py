@@ -63,6 +63,21 @@ class OperatingPoint:
         angle = w * (t - tr) + (0.5 * w * tr if tr > 0 else 0.0)
         return Inputs(angle, w, self.load_torque, 0.0)
 
+    def input_arrays(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`inputs` at many times at once: arrays (angle, speed, acceleration, torque),
+        the same formulas in the same order, so the same numbers."""
+        t = np.asarray(times, float)
+        w, tr = self.speed, self.ramp_time
+        angle = w * (t - tr) + (0.5 * w * tr if tr > 0 else 0.0)
+        speed = np.full(t.shape, float(w))
+        acc = np.zeros(t.shape)
+        if tr > 0:
+            ramp = t < tr
+            angle = np.where(ramp, 0.5 * w / tr * t * t, angle)
+            speed = np.where(ramp, w * t / tr, speed)
+            acc = np.where(ramp, w / tr, acc)
+        return angle, speed, acc, np.full(t.shape, float(self.load_torque))
+
 
 def drive_from_parameters(params: Mapping[str, Any], name: str = "") -> Drive:
     """The Drive the drive.* parameters describe (centre distance 0: the tight distance)."""
@@ -273,6 +288,11 @@ class Scene:
 
     def inputs(self, t: float) -> Inputs:
         return self.operating.inputs(t)
+
+    def input_arrays(self, times):
+        """The inputs at many times: (angle, speed, acceleration, torque) arrays
+        (:meth:`OperatingPoint.input_arrays`)."""
+        return self.operating.input_arrays(times)
 
     def times(self) -> np.ndarray:
         n = max(1, round(self.duration / self.output_interval))

@@ -446,36 +446,40 @@ def _changed(g, g0):
     return False
 
 
+W_ROWS = 8      # work vectors of the state's size: xn, xm, xh, k1, k2, k3, k4, tmp
+V_ROWS = 7      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi
+
+
 @jit
-def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
-    """``n_steps`` RK4 steps of size h from (t0, x0) with the six switching functions located
-    by safeguarded regula falsi (the algorithm of chainmodel.integrate.FixedStepper._bisect, to
-    1e-12 s). Returns (x, events, rhs_evaluations); located event times go to
-    ``event_times[:events]`` (as many as fit)."""
-    n = x0.size
-    x = x0.copy()
-    xn = np.empty(n)
-    xm = np.empty(n)
-    xh = np.empty(n)
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    tmp = np.empty(n)
-    aux = np.empty(A_SIZE)
-    g0 = np.empty(6)
-    g1 = np.empty(6)
-    gh = np.empty(6)
-    gm = np.empty(6)
-    glo = np.empty(6)
-    flo = np.empty(6)
-    fhi = np.empty(6)
+def _rk4_interval(x, t0, n_steps, h, c, G, P, W, V, aux, log, log_at, log_cap):
+    """``n_steps`` RK4 steps of size h from (t0, x), in place on ``x``, with the six switching
+    functions located by safeguarded regula falsi (the algorithm of chainmodel.integrate.
+    FixedStepper._bisect, to 1e-12 s). The first ``log_cap`` located event times go to
+    ``log[(log_at + k) % log.size]``. Stops after a step that leaves a non-finite state.
+    Returns (events, rhs_evaluations, finite)."""
+    n = x.size
+    xn = W[0]
+    xm = W[1]
+    xh = W[2]
+    k1 = W[3]
+    k2 = W[4]
+    k3 = W[5]
+    k4 = W[6]
+    tmp = W[7]
+    g0 = V[0]
+    g1 = V[1]
+    gh = V[2]
+    gm = V[3]
+    glo = V[4]
+    flo = V[5]
+    fhi = V[6]
     evals = 0
     events = 0
     t = t0
     _switch(t, x, c, G, P, k1, aux, g0)
     evals += 1
     tol = 1e-12 * max(1.0, h)
+    finite = True
     for _ in range(n_steps):
         _rk4(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
         _switch(t + h, xn, c, G, P, k1, aux, g1)
@@ -530,8 +534,8 @@ def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
                         if side == 1:
                             fhi[i] = 0.5 * fhi[i]
                     side = 1
-            if events < event_times.size:
-                event_times[events] = t + hi
+            if events < log_cap:
+                log[(log_at + events) % log.size] = t + hi
             events += 1
             rest = h - hi
             if rest > 0.0:
@@ -547,10 +551,82 @@ def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
             x[i] = xn[i]
         for i in range(6):
             g0[i] = g1[i]
-        finite = True
         for i in range(n):
             if not math.isfinite(x[i]):
                 finite = False
         if not finite:
             break
+    return events, evals, finite
+
+
+@jit
+def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
+    """``n_steps`` RK4 steps of size h from (t0, x0) over one communication step (inputs ``c``,
+    see :func:`_inputs`). Returns (x, events, rhs_evaluations); located event times go to
+    ``event_times[:events]`` (as many as fit)."""
+    x = x0.copy()
+    W = np.empty((W_ROWS, x.size))
+    V = np.empty((V_ROWS, 6))
+    aux = np.empty(A_SIZE)
+    events, evals, _ = _rk4_interval(x, t0, n_steps, h, c, G, P, W, V, aux, event_times, 0,
+                                     event_times.size)
     return x, events, evals
+
+
+@jit
+def rk4_advance_many(x0, times, steps, angle, speed, acc, load, G, P, states, log, log_cap):
+    """:func:`rk4_advance` over the communication steps [times[i-1], times[i]] one after the
+    other, with the inputs sampled at the communication points (angle, speed, acc, load: the
+    source's values at ``times``) and cubic Hermite inside each step exactly as
+    :meth:`~chainmodel.models.torsional.TorsionalModel.advance_compiled` builds them, so the
+    states are those of the per-point path. ``steps[i-1]`` RK4 steps in step i; ``states[i]``
+    receives the state at ``times[i]`` (``states[0] = x0``). At most ``log_cap`` event times
+    per communication step go to the ring buffer ``log`` (in order, from index 0).
+
+    Returns (reached, steps, events, rhs_evaluations, logged): ``reached`` is the index of the
+    last state written - len(times) - 1, or the first communication point with a non-finite
+    state (the loop stops there)."""
+    x = x0.copy()
+    W = np.empty((W_ROWS, x.size))
+    V = np.empty((V_ROWS, 6))
+    aux = np.empty(A_SIZE)
+    c = np.empty(10)
+    for j in range(x.size):
+        states[0, j] = x[j]
+    total = 0
+    events = 0
+    evals = 0
+    logged = 0
+    for i in range(1, times.size):
+        t0 = times[i - 1]
+        t1 = times[i]
+        c[C_T0] = t0
+        c[C_DT] = t1 - t0
+        c[C_A0] = angle[i - 1]
+        c[C_W0] = speed[i - 1]
+        c[C_A1] = angle[i]
+        c[C_W1] = speed[i]
+        c[C_ACC0] = acc[i - 1]
+        c[C_ACC1] = acc[i]
+        c[C_L0] = load[i - 1]
+        c[C_L1] = load[i]
+        m = steps[i - 1]
+        e, v, finite = _rk4_interval(x, t0, m, (t1 - t0) / m, c, G, P, W, V, aux, log, logged,
+                                     log_cap)
+        total += m
+        events += e
+        evals += v
+        logged += min(e, log_cap)
+        for j in range(x.size):
+            states[i, j] = x[j]
+        if not finite:
+            return i, total, events, evals, logged
+    return times.size - 1, total, events, evals, logged
+
+
+@jit
+def evaluate_many(X, th_in, w_in, a_in, load, G, P, AUX):
+    """:func:`evaluate` at every row of X (inputs per row); AUX[i] its auxiliary quantities."""
+    dx = np.empty(X.shape[1])
+    for i in range(X.shape[0]):
+        evaluate(X[i], th_in[i], w_in[i], a_in[i], load[i], G, P, dx, AUX[i])
