@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -81,8 +82,16 @@ class OperatingPoint:
 
 def drive_from_parameters(params: Mapping[str, Any], name: str = "") -> Drive:
     """The Drive the drive.* parameters describe (centre distance 0: the tight distance)."""
-    n1, n2 = params["drive.driver_teeth"], params["drive.driven_teeth"]
-    p, links, a = params["drive.pitch"], params["drive.links"], params["drive.centre_distance"]
+    return _drive(params["drive.driver_teeth"], params["drive.driven_teeth"],
+                  params["drive.pitch"], params["drive.links"], params["drive.centre_distance"],
+                  name)
+
+
+@lru_cache(maxsize=64)
+def _drive(n1, n2, p, links, a, name) -> Drive:
+    # Cached: a Drive is immutable, and building one checks that the chain wraps it (the
+    # wrapping length's minimum over a tooth period, ~20 ms) - which every simulate() call of
+    # a scene would otherwise repeat.
     if a == 0:
         return Drive.from_links(n1, n2, p, links, name=name)
     return Drive.from_centre_distance(n1, n2, p, a, links, name=name)

@@ -306,8 +306,13 @@ class TorsionalModel(Model):
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N], shared with level 0
-        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included)."""
-        return static_span_tension(self.drive, self.params)
+        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included).
+        Computed once per model (its parameters are fixed): level 2 asks for it five times."""
+        cached = self.__dict__.get("_static_tension_value")
+        if cached is None:
+            cached = self.__dict__["_static_tension_value"] = static_span_tension(self.drive,
+                                                                                  self.params)
+        return cached
 
     def stiffness_bound(self) -> np.ndarray:
         """Linear stiffness matrix of the sprocket rotations with both spans taut, their
