@@ -18,6 +18,8 @@ when numba is present; with --per-point also the automatic step through the per-
 point path (one Python round trip per point, as the FMU steps); with --all (1 ms only) the
 plain-Python RK4 and Verlet and the adaptive steppers.
 
+A last table splits the automatic-step runs' wall time into stepping and the rest.
+
     python benchmarks/reduced.py [--duration 0.5] [--repeat 3] [--per-point] [--all]
 """
 
@@ -90,6 +92,7 @@ def main(argv=None):
         for iv in INTERVALS) + " |")
     rows = [head, "|" + "---|" * (3 + 4 * len(INTERVALS))]
     ref_rows = []
+    split_rows = []
     for name in args.scenes:
         for level in (1, 2):
             base = chainmodel.Scene.from_preset(name, fidelity=level, duration=dur,
@@ -101,7 +104,7 @@ def main(argv=None):
             ref2, _, _ = run(base, "rk4", step=h_ref / 2)
             ref_rows.append(f"| {name} | {level} | {h_auto:.3g} | {h_ref:.3g} | "
                             + " | ".join(fmt(v) for v in errors(ref, ref2, dur)) + " |")
-            cases = {}
+            cases, split = {}, {}
             for iv in INTERVALS:
                 scene = base.with_overrides(output_interval=iv)
                 todo = [("rk4 auto (compiled)", "rk4", 0.0, True, True),
@@ -126,6 +129,9 @@ def main(argv=None):
                         cases.setdefault(label, {})[iv] = f"failed: {exc}"
                         continue
                     d_phi, d_t = errors(r, ref, dur)
+                    if label.startswith("rk4 auto"):
+                        split.setdefault(label, {})[iv] = (
+                            f"{wall * 1e3:.1f} | {stepper * 1e3:.1f} | {(wall - stepper) * 1e3:.1f}")
                     cases.setdefault(label, {})[iv] = (
                         f"{dur / wall:.1f} | {dur / stepper:.1f} | {d_phi:.2g} | {fmt(d_t)}")
                     print(f"  {name} {level} {iv:g} {label}: whole {dur / wall:.1f}x, stepper "
@@ -135,6 +141,9 @@ def main(argv=None):
             for label, by_iv in cases.items():
                 cells = [by_iv.get(iv, "- | - | - | -") for iv in INTERVALS]
                 rows.append(f"| {name} | {level} | {label} | " + " | ".join(cells) + " |")
+            for label, by_iv in split.items():
+                cells = [by_iv.get(iv, "- | - | -") for iv in INTERVALS]
+                split_rows.append(f"| {name} | {level} | {label} | " + " | ".join(cells) + " |")
     print()
     print("Reference (RK4 at h_ref) against RK4 at h_ref/2, same measures:\n")
     print("| scene | level | automatic step [s] | h_ref [s] | max dphi2 [rad] | rms dT [N] |")
@@ -142,6 +151,13 @@ def main(argv=None):
     print("\n".join(ref_rows))
     print()
     print("\n".join(rows))
+    print()
+    print(f"Where the whole call's time goes ({dur} s simulated; ms; rest = set-up, initial "
+          "state, input sampling and outputs):\n")
+    print("| scene | level | stepper | " + " | ".join(
+        f"{iv * 1e3:g} ms: whole | stepping | rest" for iv in INTERVALS) + " |")
+    print("|" + "---|" * (3 + 3 * len(INTERVALS)))
+    print("\n".join(split_rows))
 
 
 if __name__ == "__main__":
