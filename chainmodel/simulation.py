@@ -126,15 +126,14 @@ def _run_batched(scene, model, stepper, times, data, bar) -> bool:
             return False            # only possible at the first chunk: nothing written yet
         out = outputs_many(times[sl], states, *(a[sl] for a in inputs))
         first = 0 if start == 0 else 1   # the chunk's first point is the previous one's last
+        finite = np.all([np.isfinite(out[name][first:]) for name in data], axis=0)
+        if not np.all(finite):          # the per-point loop's check, at the earliest point
+            k = first + int(np.argmax(~finite))
+            bad = [n for n in data if not math.isfinite(out[n][k])]
+            raise SimulationDiverged(f"{model.name} model produced non-finite outputs "
+                                     f"{', '.join(bad[:5])} at t = {times[start + k]:.6g} s")
         for name in data:
-            values = out[name][first:]
-            if not np.all(np.isfinite(values)):
-                k = int(np.argmax(~np.isfinite(values)))
-                bad = [n for n in data if not math.isfinite(out[n][first + k])]
-                raise SimulationDiverged(
-                    f"{model.name} model produced non-finite outputs {', '.join(bad[:5])} at "
-                    f"t = {times[start + first + k]:.6g} s")
-            data[name][start + first:stop + 1] = values
+            data[name][start + first:stop + 1] = out[name][first:]
         bar.update(float(times[stop]))
         start = stop
     return True
