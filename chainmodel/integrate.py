@@ -16,9 +16,11 @@ Methods
 
 Fixed steps default to 90 % of the stable limit the model reports (:meth:`Model.stable_step`);
 a larger requested step is refused with the limit in the message. Every stepper stops on the
-model's switching functions (a span going slack...) by bisection or scipy events, so kinks are
-resolved rather than smeared, and checks the state after each communication step: a diverging
-integration raises :class:`SimulationDiverged`, it never returns NaN.
+model's switching functions (a span going slack...): the fixed-step methods locate the first
+sign change in a step on its dense output and step across it (:meth:`FixedStepper._cross`),
+the adaptive ones use scipy events, so kinks are resolved rather than smeared. Every stepper
+checks the state after each communication step: a diverging integration raises
+:class:`SimulationDiverged`, it never returns NaN.
 """
 
 from __future__ import annotations
@@ -96,6 +98,15 @@ class Stepper(ABC):
                                      f"{', '.join(bad[:5])} at t = {self.t:.6g} s")
         return out
 
+    def advance_batch(self, times, angle, speed, acceleration, torque) -> np.ndarray | None:
+        """Integrate through the communication points ``times`` (``times[0]`` the current time)
+        in one call, the inputs given there as arrays (the source's values: angle, speed,
+        acceleration, torque); the states at every point, as ``advance`` would leave them one
+        point at a time, or None when this stepper and model have no such path (then call
+        ``advance`` per point). Raises SimulationDiverged as ``advance`` does; outputs are the
+        caller's (e.g. the model's vectorised ``outputs_many``)."""
+        return None
+
     def outputs(self) -> dict[str, float]:
         """Outputs at the current time and inputs."""
         return self.model.outputs(self.t, self.x, self.inputs)
@@ -138,13 +149,48 @@ class Stepper(ABC):
 
 # --- fixed step ------------------------------------------------------------------------------
 
+#: event crossing of the fixed-step methods (FixedStepper._cross; the compiled loop of levels 1-2
+#: uses the same values, models/spans.py): root tolerance on a dense output, and the gap eta
+#: between the steps on either side of an event, both relative to the step
+EVENT_TOL = 1e-5
+EVENT_GAP = 1e-4
+
+
+def _changed(g, g0) -> bool:
+    """Has any switching function changed sign (both values nonzero)?"""
+    return bool(np.any((g * g0 < 0) & (g != 0) & (g0 != 0)))
+
+
+def _dense(x0, f0, x1, f1, H, s):
+    """Dense output at s of a step from (x0, f0) at 0 to (x1, f1) at H: the cubic Hermite
+    interpolant (an extrapolation for s > H); for H = 0 the line x0 + s f0."""
+    if H == 0.0:
+        return x0 + s * f0
+    th = s / H
+    th2 = th * th
+    th3 = th2 * th
+    a = 2.0 * th3 - 3.0 * th2 + 1.0
+    return a * x0 + ((th3 - 2.0 * th2 + th) * H) * f0 + (1.0 - a) * x1 + ((th3 - th2) * H) * f1
+
+
+def _secant(lo, hi, g_lo, g_hi, g0) -> float:
+    """Earliest secant root in [lo, hi] among the functions changed between g0 and g_hi."""
+    changed = (g_hi * g0 < 0) & (g_hi != 0) & (g0 != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        roots = lo + (hi - lo) * g_lo[changed] / (g_lo[changed] - g_hi[changed])
+    roots = roots[np.isfinite(roots)]
+    if not roots.size:
+        return 0.5 * (lo + hi)
+    return min(max(float(np.min(roots)), lo), hi)
+
+
 def stability_limit(method: str) -> float:
     """Stability interval on the imaginary axis, h * omega_max, of a fixed-step method."""
     return {"rk4": 2.0 * math.sqrt(2.0), "verlet": 2.0}[method]
 
 
 class FixedStepper(Stepper):
-    """Common part of the fixed-step methods: step choice and event bisection."""
+    """Common part of the fixed-step methods: step choice and event crossing."""
 
     safety: ClassVar[float] = 0.9
 
@@ -192,11 +238,9 @@ class FixedStepper(Stepper):
         for _ in range(n):
             x_new = self._step(t, x, h, source)
             g1 = switch(t + h, x_new, source(t + h)) if g0.size else g0
-            if g0.size and np.any(np.sign(g1) * np.sign(g0) < 0):
-                x_new, t_hit = self._bisect(t, x, h, g0, source)
+            if g0.size and _changed(g1, g0):
+                x_new = self._cross(t, x, h, x_new, g0, g1, source)
                 self.stats["events"] += 1
-                # finish the step from the switch point with a fresh state on the new side
-                x_new = self._step(t_hit, x_new, t + h - t_hit, source) if t + h - t_hit > 0 else x_new
                 g1 = switch(t + h, x_new, source(t + h))
             t, x, g0 = t + h, x_new, g1
             self.stats["steps"] += 1
@@ -205,25 +249,125 @@ class FixedStepper(Stepper):
                 self.model.check(t, x)
         self.x = x
 
-    def _bisect(self, t, x, h, g0, source, tol=1e-12):
-        """Largest sub-step before the first sign change; returns the state just past it.
+    def advance_batch(self, times, angle, speed, acceleration, torque):
+        fast = getattr(self.model, "advance_compiled_many", None) if self.compiled else None
+        times = np.asarray(times, float)
+        if fast is None or times.size < 2 or self.model.n_states == 0:
+            return None
+        if abs(times[0] - self.t) > 1e-12 * max(1.0, abs(self.t)) or np.any(np.diff(times) <= 0):
+            raise ValueError("advance_batch needs increasing times starting at the current "
+                             f"time {self.t!r} s")
+        wall = time.perf_counter()
+        res = fast(self.method, times, self.x, self.h, angle, speed, acceleration, torque)
+        if res is None:
+            return None
+        states, reached, steps, events, evals, log = res
+        self.stats["steps"] += steps
+        self.stats["events"] += events
+        self.stats["rhs_evaluations"] += evals
+        self.event_log.extend(log)
+        self.model.check_states(times[1:reached + 1], states[1:reached + 1])
+        if reached < times.size - 1:  # pragma: no cover - check_states raises first
+            raise SimulationDiverged(f"{self.model.name} model diverged at "
+                                     f"t = {times[reached]:.6g} s (non-finite state)")
+        self.t = float(times[-1])
+        self.x = states[-1].copy()
+        self.inputs = Inputs(float(angle[-1]), float(speed[-1]), float(torque[-1]),
+                             float(acceleration[-1]))
+        self.stats["wall_time"] += time.perf_counter() - wall
+        return states
+
+    def _cross(self, t, x, h, x1, g0, g1, source):
+        """The state at t + h when a switching function changes sign over the step [t, t + h]
+        (x1 the plain step's end state, g0 and g1 the functions at both ends), the step redone
+        across the first change:
+
+        1. a first estimate s of the change on the step's cubic Hermite dense output;
+        2. one step to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
+           of every function (else s is searched again on the dense output of [t, t + sa]);
+        3. s located again on the dense output of the old side alone, (x, f) at t and at
+           t + sa extrapolated past sa - the plain step's end state straddled the kink, this
+           does not; if s ends up more than 4 eta past sa, back to 2;
+        4. across the change to sb = s + eta by the two one-sided slopes (the old side's f over
+           [sa, s], the new side's over [s, sb]), sb widened until its state is on the new side;
+        5. one step from sb to t + h.
+
+        No stage of the method straddles the kink (an error of order jump * h / 6, first order
+        in h), and the crossing errs by order eta^2 f' + jump * (error of s). The compiled loop
+        of levels 1-2 (models/spans.py, _cross) does the same."""
+        switch = self.model.switching_functions
+        rhs = self.model.rhs
+
+        def g(tt, xx):
+            return np.asarray(switch(tt, xx, source(tt)), float)
+
+        def f(tt, xx):
+            self.stats["rhs_evaluations"] += 1
+            return rhs(tt, xx, source(tt))
+
+        g0 = np.asarray(g0, float)
+        f0 = f(t, x)
+        tol, eta = EVENT_TOL * h, EVENT_GAP * h
+        s = self._locate(t, (x, f0, x1, f(t + h, x1), h), 0.0, h, g0, np.asarray(g1, float),
+                         g0, tol, source)
+        sa, xa, fa, ga = 0.0, x, f0, g0
+        for _pass in range(8):
+            for _it in range(20):                    # 2. to sa, on the old side
+                sa = s - eta
+                if sa <= 0.0:
+                    sa = 0.0
+                    break
+                xa = self._step(t, x, sa, source)
+                fa, ga = f(t + sa, xa), g(t + sa, xa)
+                if not _changed(ga, g0):
+                    break
+                s = self._locate(t, (x, f0, xa, fa, sa), 0.0, sa, g0, ga, g0, tol, source)
+            if sa == 0.0:
+                xa, fa, ga = x, f0, g0
+            sb = min(s + eta, h)                     # 3. on the old side's dense output
+            while True:
+                gb = g(t + sb, _dense(x, f0, xa, fa, sa, sb))
+                if _changed(gb, g0) or sb >= h:
+                    break
+                sb = min(sa + 2.0 * (sb - sa), h)
+            if not _changed(gb, g0):
+                break
+            if sb - sa <= 4.0 * eta:
+                s = _secant(sa, sb, ga, gb, g0)
+            else:
+                s = self._locate(t, (x, f0, xa, fa, sa), sa, sb, ga, gb, g0, tol, source)
+            if s - sa <= 4.0 * eta:
+                break
+        s = max(s, sa)                               # 4. across by the one-sided slopes
+        self.event_log.append(t + s)
+        eta_b = eta
+        while True:
+            sb = min(s + eta_b, h)
+            fq = f(t + sb, xa + (sb - sa) * fa)
+            xb = xa + (s - sa) * fa + (sb - s) * fq
+            if _changed(g(t + sb, xb), g0) or sb >= h:
+                break
+            eta_b *= 8.0
+        return self._step(t + sb, xb, h - sb, source) if sb < h else xb   # 5. the rest
+
+    def _locate(self, t, dense, lo, hi, g_lo, g_hi, g0, tol, source):
+        """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the
+        dense output ``_dense(*dense)``, g_lo and g_hi the functions at the ends; returns the
+        secant root in the final bracket (width ``tol``).
 
         Safeguarded regula falsi (Illinois variant): the trial point is the earliest secant
         root among the functions that change sign in the bracket, and an end kept twice in a
         row has its values halved, so both ends converge; a trial outside the bracket falls
-        back to bisection. Typically 5-10 sub-steps instead of bisection's 30-40."""
+        back to bisection. Each trial costs one evaluation of the switching functions on the
+        dense output, not a step of the method."""
         switch = self.model.switching_functions
-        g0 = np.asarray(g0, float)
-        lo, hi = 0.0, h
-        x_hi = self._step(t, x, h, source)
-        g_lo, g_hi = g0, np.asarray(switch(t + h, x_hi, source(t + h)), float)
+        g_lo, g_hi = np.asarray(g_lo, float), np.asarray(g_hi, float)
         f_lo, f_hi = g_lo.copy(), g_hi.copy()
         side = 0
-        tol = tol * max(1.0, h)
         for _ in range(100):
             if hi - lo <= tol:
                 break
-            changed = np.sign(g_hi) * np.sign(g0) < 0
+            changed = (g_hi * g0 < 0) & (g_hi != 0) & (g0 != 0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 roots = lo + (hi - lo) * f_lo[changed] / (f_lo[changed] - f_hi[changed])
             roots = roots[np.isfinite(roots)]
@@ -231,10 +375,10 @@ class FixedStepper(Stepper):
             margin = 1e-3 * (hi - lo)
             if not (lo + margin <= mid <= hi - margin):
                 mid = min(max(mid, lo + margin), hi - margin) if math.isfinite(mid) else 0.5 * (lo + hi)
-            x_mid = self._step(t, x, mid, source)
-            g_mid = np.asarray(switch(t + mid, x_mid, source(t + mid)), float)
-            if np.any(np.sign(g_mid) * np.sign(g0) < 0):
-                hi, x_hi, g_hi, f_hi = mid, x_mid, g_mid, g_mid.copy()
+            g_mid = np.asarray(switch(t + mid, _dense(*dense[:4], dense[4], mid),
+                                      source(t + mid)), float)
+            if _changed(g_mid, g0):
+                hi, g_hi, f_hi = mid, g_mid, g_mid.copy()
                 if side == -1:
                     f_lo = 0.5 * f_lo
                 side = -1
@@ -243,8 +387,7 @@ class FixedStepper(Stepper):
                 if side == 1:
                     f_hi = 0.5 * f_hi
                 side = 1
-        self.event_log.append(t + hi)
-        return x_hi, t + hi
+        return _secant(lo, hi, g_lo, g_hi, g0)
 
     @abstractmethod
     def _step(self, t, x, h, source) -> np.ndarray:

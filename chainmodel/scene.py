@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -63,11 +64,34 @@ class OperatingPoint:
         angle = w * (t - tr) + (0.5 * w * tr if tr > 0 else 0.0)
         return Inputs(angle, w, self.load_torque, 0.0)
 
+    def input_arrays(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`inputs` at many times at once: arrays (angle, speed, acceleration, torque),
+        the same formulas in the same order, so the same numbers."""
+        t = np.asarray(times, float)
+        w, tr = self.speed, self.ramp_time
+        angle = w * (t - tr) + (0.5 * w * tr if tr > 0 else 0.0)
+        speed = np.full(t.shape, float(w))
+        acc = np.zeros(t.shape)
+        if tr > 0:
+            ramp = t < tr
+            angle = np.where(ramp, 0.5 * w / tr * t * t, angle)
+            speed = np.where(ramp, w * t / tr, speed)
+            acc = np.where(ramp, w / tr, acc)
+        return angle, speed, acc, np.full(t.shape, float(self.load_torque))
+
 
 def drive_from_parameters(params: Mapping[str, Any], name: str = "") -> Drive:
     """The Drive the drive.* parameters describe (centre distance 0: the tight distance)."""
-    n1, n2 = params["drive.driver_teeth"], params["drive.driven_teeth"]
-    p, links, a = params["drive.pitch"], params["drive.links"], params["drive.centre_distance"]
+    return _drive(params["drive.driver_teeth"], params["drive.driven_teeth"],
+                  params["drive.pitch"], params["drive.links"], params["drive.centre_distance"],
+                  name)
+
+
+@lru_cache(maxsize=64)
+def _drive(n1, n2, p, links, a, name) -> Drive:
+    # Cached: a Drive is immutable, and building one checks that the chain wraps it (the
+    # wrapping length's minimum over a tooth period, ~20 ms) - which every simulate() call of
+    # a scene would otherwise repeat.
     if a == 0:
         return Drive.from_links(n1, n2, p, links, name=name)
     return Drive.from_centre_distance(n1, n2, p, a, links, name=name)
@@ -273,6 +297,11 @@ class Scene:
 
     def inputs(self, t: float) -> Inputs:
         return self.operating.inputs(t)
+
+    def input_arrays(self, times):
+        """The inputs at many times: (angle, speed, acceleration, torque) arrays
+        (:meth:`OperatingPoint.input_arrays`)."""
+        return self.operating.input_arrays(times)
 
     def times(self) -> np.ndarray:
         n = max(1, round(self.duration / self.output_interval))

@@ -153,6 +153,57 @@ def test_switching_function_resolves_the_kink(make):
     assert err_events < err_plain
 
 
+class ForceJump(Oscillator):
+    """x'' = -w^2 x - a sign(x): a restoring force that jumps by 2a where x changes sign. From
+    x = 0, v = 1 the positive half is x = -a/w^2 + (a/w^2) cos(w t) + sin(w t)/w, back at 0 with
+    v = -1 after T = (2/w) atan(w/a); the negative half mirrors it (period 2T)."""
+
+    def __init__(self, w, a):
+        super().__init__(w)
+        self.a = a
+        self.half = 2.0 / w * math.atan(w / a)
+
+    def exact(self, t):
+        k, r = divmod(t, self.half)
+        sign = 1.0 if int(k) % 2 == 0 else -1.0
+        w, a = self.w1, self.a
+        return sign * np.array([-a / w**2 + a / w**2 * math.cos(w * r) + math.sin(w * r) / w,
+                                -a / w * math.sin(w * r) + math.cos(w * r)])
+
+    def initial_state(self, u):
+        return self.exact(0.5 * self.half)        # start inside a half-period, off the switch
+
+    def rhs(self, t, x, u):
+        return np.array([x[1], -self.w1**2 * x[0] - (self.a if x[0] > 0 else -self.a)])
+
+    def switching_functions(self, t, x, u):
+        return np.array([x[0]])
+
+
+@pytest.mark.parametrize("cls", [RK4, Verlet])
+def test_steps_across_a_jump_of_the_right_hand_side_keep_their_order(cls):
+    """Where the force jumps (2a = 40 against w^2 |x| < 2), a step that straddles the switch
+    errs by order jump * h; stepping across it (FixedStepper._cross) keeps the method's order:
+    halving the step divides the error after six crossings by about 2^order, and RK4's crossing
+    times are the exact ones to a small fraction of the step."""
+    m = ForceJump(2 * math.pi, 20.0)
+    t_end = 6.37 * m.half - 0.5 * m.half
+    ref = m.exact(t_end + 0.5 * m.half)
+    order = 4 if cls is RK4 else 2
+    errors = []
+    for h in (m.half / 7.3, m.half / 14.6):
+        s = cls(m, step=h)
+        out = s.advance(t_end)
+        errors.append(math.hypot(out["x"] - ref[0], (out["v"] - ref[1]) / m.w1))
+        assert s.stats["events"] == 6
+        if cls is RK4:   # (Verlet's own second-order phase error moves its crossings more)
+            crossings = (np.arange(6) + 0.5) * m.half
+            assert np.max(np.abs(np.array(s.event_log) - crossings)) < 1e-4 * h
+    assert errors[0] / errors[1] > 0.5 * 2**order
+    if cls is RK4:
+        assert errors[1] < 1e-7
+
+
 def test_fixed_step_above_stable_limit_is_refused():
     w = 2 * math.pi
     limit = stability_limit("rk4") / w

@@ -183,6 +183,12 @@ class Model(ABC):
                 f"{self.name} model diverged at t = {t:.6g} s: non-finite state {', '.join(bad[:5])}; "
                 "try a smaller step or an implicit solver (solver.method = radau)")
 
+    def check_states(self, times, states) -> None:
+        """:meth:`check` for many states, in order (a model whose check is vectorisable may do
+        it at once, raising for the same first state)."""
+        for t, x in zip(times, states):
+            self.check(float(t), x)
+
     def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
         """Extra arrays for plots (e.g. roller positions); empty by default."""
         return {}

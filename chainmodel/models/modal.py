@@ -157,3 +157,18 @@ class ModalModel(TorsionalModel):
 
     def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
         return float(aux[S.A_MID_UP] if forward else aux[S.A_MID_LOW])
+
+    def _midspan_many(self, aux, forward, tight, tight_length) -> np.ndarray:
+        return np.where(forward, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
+
+    def check_states(self, times, states) -> None:
+        """:meth:`check` for many states (vectorised): raises for the first that fails."""
+        base = self.n_sprocket_states
+        q = np.abs(states[:, base:base + 2 * self.n_modes])
+        limit = 0.1 * min(self.reference["l_up"], self.reference["l_low"])
+        bad = ~np.all(np.isfinite(states), axis=1)
+        if q.shape[1]:
+            bad |= np.max(q, axis=1) > limit
+        if bad.any():
+            i = int(np.argmax(bad))
+            self.check(float(times[i]), states[i])

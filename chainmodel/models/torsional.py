@@ -276,11 +276,43 @@ class TorsionalModel(Model):
                                              c, self.G, self.P, times)
         return x_new, n, int(events), int(evals), list(times[:min(int(events), times.size)])
 
+    #: event times kept per communication step by advance_compiled (and so by the batched path)
+    EVENTS_PER_STEP = 16
+
+    def advance_compiled_many(self, method, times, x, h, angle, speed, acceleration, torque,
+                              log_size=1000):
+        """:meth:`advance_compiled` over every communication step [times[i-1], times[i]] in one
+        compiled call, with the inputs given at the communication points (the source's values
+        there: what ``advance_compiled`` takes from it at each step's ends). The same steps,
+        inputs and arithmetic, so the same states as the per-point calls. None when not
+        available. Returns (states, reached, steps, events, rhs_evaluations, event_times):
+        ``states[i]`` at ``times[i]`` for i <= reached (reached < len(times) - 1 when a state
+        became non-finite), event_times the last ``log_size`` located events in order."""
+        if method != "rk4" or not S.NUMBA:
+            return None
+        times = np.ascontiguousarray(times, float)
+        steps = np.maximum(1, np.ceil(np.diff(times) / h - 1e-9)).astype(np.int64)
+        states = np.empty((times.size, self.n_states))
+        log = np.empty(log_size)
+        reached, n, events, evals, logged = S.rk4_advance_many(
+            np.asarray(x, float), times, steps, *(np.ascontiguousarray(a, float) for a in
+                                                   (angle, speed, acceleration, torque)),
+            self.G, self.P, states, log, self.EVENTS_PER_STEP)
+        if logged > log_size:
+            log = np.roll(log, -(logged % log_size))
+        return (states, int(reached), int(n), int(events), int(evals),
+                list(log[:min(int(logged), log_size)]))
+
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N], shared with level 0
-        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included)."""
-        return static_span_tension(self.drive, self.params)
+        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included).
+        Computed once per model (its parameters are fixed): level 2 asks for it five times."""
+        cached = self.__dict__.get("_static_tension_value")
+        if cached is None:
+            cached = self.__dict__["_static_tension_value"] = static_span_tension(self.drive,
+                                                                                  self.params)
+        return cached
 
     def stiffness_bound(self) -> np.ndarray:
         """Linear stiffness matrix of the sprocket rotations with both spans taut, their
@@ -359,8 +391,62 @@ class TorsionalModel(Model):
         out["contact.max_force"] = tight
         return out
 
+    def _midspan_many(self, aux, forward, tight, tight_length) -> np.ndarray:
+        """:meth:`_midspan` for arrays of samples."""
+        p = self.params
+        rho = p["chain.link_mass"] / self.drive.pitch
+        g_n = p["gravity"] * math.cos(p["drive.inclination"])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sag = rho * g_n * tight_length ** 2 / (8.0 * tight)
+        return np.where(tight > 0.0, -np.minimum(sag, tight_length / 2), -tight_length / 2)
+
+    def outputs_many(self, times, states, angle, speed, acceleration, torque
+                     ) -> dict[str, np.ndarray]:
+        """:meth:`outputs` at many samples at once: ``states[i]`` at ``times[i]`` with the inputs
+        (angle, speed, acceleration, torque)[i]; the same kernel and formulas, vectorised."""
+        states = np.ascontiguousarray(states, float).reshape(len(times), self.n_states)
+        speed = np.ascontiguousarray(speed, float)
+        aux = np.empty((states.shape[0], S.A_SIZE))
+        S.evaluate_many(states, np.ascontiguousarray(angle, float), speed,
+                        np.ascontiguousarray(acceleration, float),
+                        np.ascontiguousarray(torque, float), self.G, self.P, aux)
+        forward = speed >= 0.0
+        t_up, t_low = aux[:, S.A_T_UP], aux[:, S.A_T_LOW]
+        tight = np.where(forward, t_up, t_low)
+        slack = np.where(forward, t_low, t_up)
+        length = np.where(forward, aux[:, S.A_L_UP], aux[:, S.A_L_LOW])
+        phi1, w1 = aux[:, S.A_PHI1].copy(), aux[:, S.A_W1].copy()
+        if self.rigid:
+            phi2, w2 = states[:, 0].copy(), states[:, 1].copy()
+        else:
+            phi2, w2 = states[:, 1].copy(), states[:, 3].copy()
+        ratio = self.drive.tooth_ratio
+        velocity_ratio = np.full(w1.shape, ratio)
+        np.divide(w2, w1, out=velocity_ratio, where=np.abs(w1) > 1e-9)
+        return {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
+                "driven.speed": w2, "driven.acceleration": aux[:, S.A_ACC2].copy(),
+                "input_shaft.torque": aux[:, S.A_TAU_IN].copy(),
+                "tight_span.tension": tight, "slack_span.tension": slack,
+                "tight_span.length": length, "velocity_ratio": velocity_ratio,
+                "transmission_error": phi2 - ratio * phi1,
+                "tight_span.midspan_deflection": self._midspan_many(aux, forward, tight, length),
+                "chain.max_link_tension": np.maximum(tight, slack),
+                "contact.max_force": tight.copy()}
+
     def evaluate_states(self, times, states, inputs) -> dict[str, np.ndarray]:
-        """Outputs for a sequence of (t, x, u) (convenience for post-processing)."""
-        rows = [self.outputs(float(t), np.asarray(x, float), u)
-                for t, x, u in zip(times, states, inputs)]
-        return {o.name: np.array([r[o.name] for r in rows]) for o in ALL_OUTPUTS}
+        """Outputs for a sequence of (t, x, u) (convenience for post-processing); ``inputs`` a
+        sequence of :class:`Inputs` or a tuple of arrays (angle, speed, acceleration, torque)."""
+        if len(inputs) == 4 and not isinstance(inputs[0], Inputs):
+            arrays = inputs
+        else:
+            arrays = [np.array([getattr(u, k) for u in inputs], float)
+                      for k in ("angle", "speed", "acceleration", "torque")]
+        out = self.outputs_many(np.asarray(times, float), states, *arrays)
+        return {o.name: out[o.name] for o in ALL_OUTPUTS}
+
+    def check_states(self, times, states) -> None:
+        """:meth:`check` for many states (vectorised): raises for the first that fails."""
+        bad = ~np.all(np.isfinite(states), axis=1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            self.check(float(times[i]), states[i])
