@@ -224,7 +224,8 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("solver.method", "auto", "", "time stepper (see chainmodel.integrate)", kind=str,
        choices=("auto", "rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda"),
        levels=(1, 2, 3)),
-    _p("solver.step", 0.0, "s", "fixed step; 0 chooses the largest stable step automatically",
+    _p("solver.step", 0.0, "s", "fixed step; 0 chooses the largest stable step automatically (in a scene "
+       "at most a quarter tooth period at its input speed, levels 1-2)",
        minimum=0.0, levels=(1, 2, 3)),
     _p("solver.rtol", 1e-6, "", "relative tolerance of the adaptive steppers", minimum=1e-12,
        maximum=0.1, levels=(1, 2, 3)),

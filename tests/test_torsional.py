@@ -342,3 +342,20 @@ def test_seat_stiffness_ladder():
     for _ in range(200):
         k = kc + kl * k / (kl + k)
     assert K == pytest.approx(k, rel=1e-12)
+
+
+def test_scene_caps_the_automatic_step_at_a_quarter_tooth_period():
+    """C1 (J1 = 0.6 kg m^2, a 28 Hz sprocket mode) has a stability bound above its 12.5 ms tooth
+    period at 400 rpm; a fixed step crosses only the first event inside it, so a scene keeps the
+    automatic step at a quarter tooth period (four seating/release events per tooth period)."""
+    sc = chainmodel.Scene.from_preset("C1", fidelity=1, duration=0.5, output_interval=1e-2)
+    quarter = 60.0 / (400.0 * sc.drive.n_driver) / 4.0
+    st = sc.stepper()
+    assert st.stable_limit > 2 * quarter            # the stability bound alone would not do it
+    assert st.h == pytest.approx(quarter, rel=1e-9)
+    r = chainmodel.simulate(sc)
+    ref = chainmodel.simulate(sc.with_overrides(solver_step=quarter / 8))
+    late = r.time >= 0.25
+    assert np.max(np.abs(r["driven.angle"][late] - ref["driven.angle"][late])) < 1e-4
+    # an explicit solver.step is the user's choice and is kept
+    assert sc.with_overrides(solver_step=2 * quarter).stepper().h == pytest.approx(2 * quarter)

@@ -171,6 +171,11 @@ class Model(ABC):
         interval on the imaginary axis, i.e. 1 / omega_max); inf when unknown."""
         return math.inf
 
+    def event_step(self, speed: float) -> float:
+        """Largest fixed step that resolves the switching functions' sign changes one at a
+        time when the driver turns at ``speed`` [rad/s]; inf for a model without events."""
+        return math.inf
+
     def jacobian_sparsity(self):
         """Sparsity pattern of d(rhs)/dx for implicit steppers (None: dense)."""
         return None

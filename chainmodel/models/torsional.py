@@ -341,6 +341,15 @@ class TorsionalModel(Model):
     def stable_step(self, x: np.ndarray) -> float:
         return 1.0 / self.omega_max(x)
 
+    def event_step(self, speed: float) -> float:
+        """A quarter of the driver's tooth period 2 pi / (n_driver |speed|): each tooth period
+        has four seating and release events (two per span), and a fixed step crosses only the
+        first event inside it."""
+        speed = abs(float(speed))
+        if speed == 0.0 or not math.isfinite(speed):
+            return math.inf
+        return 0.25 * 2.0 * math.pi / (self.drive.n_driver * speed)
+
     def state_scale(self) -> np.ndarray:
         """Typical magnitudes of the states (absolute tolerances of adaptive steppers are
         rtol times these): 1e-3 rad and 1 rad/s for the sprockets."""
