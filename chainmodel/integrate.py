@@ -194,7 +194,8 @@ class FixedStepper(Stepper):
 
     safety: ClassVar[float] = 0.9
 
-    def __init__(self, model: Model, t0=0.0, x0=None, inputs=None, step: float = 0.0):
+    def __init__(self, model: Model, t0=0.0, x0=None, inputs=None, step: float = 0.0,
+                 max_step: float = math.inf):
         super().__init__(model, t0, x0, inputs)
         limit = stability_limit(self.method) * model.stable_step(self.x)
         if step and step > 0:
@@ -209,7 +210,8 @@ class FixedStepper(Stepper):
             if not math.isfinite(limit):
                 raise ValueError(f"the {model.name} model reports no stability limit; give "
                                  f"solver.step explicitly for the {self.method} stepper")
-            self.h = self.safety * limit
+            # max_step: a bound from outside stability, e.g. one event per step
+            self.h = min(self.safety * limit, float(max_step))
         self.stable_limit = limit
 
     #: let a model that offers ``advance_compiled`` (a compiled loop of this method over the
@@ -510,15 +512,17 @@ METHODS = ("rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda")
 
 
 def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: Inputs | None = None,
-                 step: float = 0.0, rtol: float = 1e-6, x0=None, **options) -> Stepper:
+                 step: float = 0.0, rtol: float = 1e-6, x0=None, max_step: float = math.inf,
+                 **options) -> Stepper:
     """A stepper for ``model``. ``method="auto"`` lets the model choose
-    (its ``preferred_method`` attribute; rk45 otherwise)."""
+    (its ``preferred_method`` attribute; rk45 otherwise). ``max_step`` bounds the automatic
+    step of the fixed-step methods (an explicit ``step`` is kept as given)."""
     if method == "auto":
         method = getattr(model, "preferred_method", "rk45")
     if method == "rk4":
-        return RK4(model, t0, x0, inputs, step=step)
+        return RK4(model, t0, x0, inputs, step=step, max_step=max_step)
     if method == "verlet":
-        return Verlet(model, t0, x0, inputs, step=step)
+        return Verlet(model, t0, x0, inputs, step=step, max_step=max_step)
     if method in Adaptive.SCIPY:
         return Adaptive(model, t0, x0, inputs, method=method, rtol=rtol, **options)
     raise ValueError(f"unknown solver method {method!r}; choose auto or one of {', '.join(METHODS)}")

@@ -33,7 +33,7 @@ import numpy as np
 
 from . import parameters as P
 from .geometry import Drive, check_positive
-from .integrate import FixedStepper, Stepper, make_stepper
+from .integrate import Stepper, make_stepper
 from .models import Inputs, Model, model_class
 from .presets import INCH, preset, preset_names, reference_values
 
@@ -310,14 +310,10 @@ class Scene:
     def stepper(self, model: Model | None = None) -> Stepper:
         model = model or self.model()
         p = self.parameters
-        st = make_stepper(model, p["solver.method"], 0.0, self.inputs(0.0), step=p["solver.step"],
-                          rtol=p["solver.rtol"])
         # The automatic fixed step is a stability bound; for a heavy drive (C1: a 28 Hz sprocket
         # mode) it can exceed the tooth period, and a fixed step crosses only its first event.
-        cap = model.event_step(self.operating.speed)
-        if not p["solver.step"] and isinstance(st, FixedStepper) and st.h > cap:
-            st = make_stepper(model, st.method, 0.0, self.inputs(0.0), step=cap)
-        return st
+        return make_stepper(model, p["solver.method"], 0.0, self.inputs(0.0), step=p["solver.step"],
+                            rtol=p["solver.rtol"], max_step=model.event_step(self.operating.speed))
 
 
 def _finite(name, value):
