@@ -149,6 +149,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     same numbers as the per-point loop (``batched=False``, one ``Stepper.advance`` per point as
     the FMU steps), without its Python overhead per point."""
     model = scene.model()
+    scene.check_operating_point(model)
     times = scene.times()
     if model.n_states == 0 and hasattr(model, "evaluate") and not snapshot_every:
         # stateless level: every sample at once (vectorised over time)

@@ -155,11 +155,11 @@ class ModalModel(TorsionalModel):
             " (sum of the span's Galerkin modes at its middle)")
         return d
 
-    def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
-        return float(aux[S.A_MID_UP] if forward else aux[S.A_MID_LOW])
+    def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
+        return float(aux[S.A_MID_UP] if upper else aux[S.A_MID_LOW])
 
-    def _midspan_many(self, aux, forward, tight, tight_length) -> np.ndarray:
-        return np.where(forward, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
+    def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
+        return np.where(upper, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
 
     def check_states(self, times, states) -> None:
         """:meth:`check` for many states (vectorised): raises for the first that fails."""
