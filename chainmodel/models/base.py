@@ -266,14 +266,15 @@ class Model(ABC):
         if bounds is None:   # the parameters are fixed for a model's life: compute once
             bounds = self.__dict__["_input_bounds"] = (*self.speed_limit(), self.torque_limit())
         w_max, why, t_max = bounds
-        if abs(speed) > w_max:
-            return (f"input input_shaft.speed = {speed:.6g} rad/s ({speed / limits.RPM:.6g} rpm)"
-                    f" is beyond the {self.name} model's (level {self.level}) limit of "
-                    f"{w_max:.6g} rad/s ({w_max / limits.RPM:.6g} rpm): {why}")
         if abs(torque) > t_max:
             return (f"input load.torque = {torque:.6g} N.m is beyond +-{t_max:.4g} N.m: the tight "
                     f"span would carry {abs(torque) / self.drive.driven.pitch_radius:.4g} N, "
                     f"more than {100 * limits.STRAIN_LIMIT:g} % strain of a link of "
                     f"chain.link_stiffness = {self.params['chain.link_stiffness']:g} N/m where "
-                    "the models hold; use a smaller load or a stiffer chain")
+                    f"the models hold; use a smaller load or chain.link_stiffness >= "
+                    f"{abs(torque) / self.drive.driven.pitch_radius / (limits.STRAIN_LIMIT * self.drive.pitch):.3g} N/m")
+        if abs(speed) > w_max:
+            return (f"input input_shaft.speed = {speed:.6g} rad/s ({speed / limits.RPM:.6g} rpm)"
+                    f" is beyond the {self.name} model's (level {self.level}) limit of "
+                    f"{w_max:.6g} rad/s ({w_max / limits.RPM:.6g} rpm): {why}")
         return None

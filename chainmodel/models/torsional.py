@@ -225,8 +225,15 @@ class TorsionalModel(Model):
                 lo, hi = lo - a_o, hi + a_o
                 flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
             else:
-                raise ValueError("no static equilibrium of the driven sprocket under "
-                                 f"load.torque = {u.torque:g} N.m")
+                p = self.params
+                raise ValueError(
+                    f"no static equilibrium of the driven sprocket within 20 teeth of the "
+                    f"kinematic position under load.torque = {u.torque:g} N.m: the spans "
+                    f"(chain.link_stiffness = {p['chain.link_stiffness']:g} N/m per link, "
+                    f"static tension {self.static_tension():.4g} N) cannot carry "
+                    f"{abs(u.torque) / d.driven.pitch_radius:.4g} N of tension difference "
+                    "without stretching by more than that; use a stiffer chain or a smaller "
+                    "load")
             if flo == 0.0:
                 return lo
             if fhi == 0.0:
