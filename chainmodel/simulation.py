@@ -61,6 +61,12 @@ class Result:
         from .analysis.summary import summarise
         return summarise(self)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What the summary warns about (a short steady window, an output interval that cannot
+        resolve the meshing frequency); the CLI prints them."""
+        return list(self.summary()["warnings"])
+
     def to_csv(self, path: str | Path) -> Path:
         path = Path(path)
         with path.open("w", newline="") as fh:
