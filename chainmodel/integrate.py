@@ -559,5 +559,8 @@ def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: In
     if method == "verlet":
         return Verlet(model, t0, x0, inputs, step=step, max_step=max_step)
     if method in Adaptive.SCIPY:
-        return Adaptive(model, t0, x0, inputs, method=method, rtol=rtol, **options)
+        # max_step: a bound on the step (a scene's quarter tooth period) so that no step
+        # spans a seating and the release after it unseen by scipy's event detection
+        return Adaptive(model, t0, x0, inputs, method=method, rtol=rtol, max_step=max_step,
+                        **options)
     raise ValueError(f"unknown solver method {method!r}; choose auto or one of {', '.join(METHODS)}")

@@ -71,6 +71,12 @@ class ModalModel(TorsionalModel):
         super().__init__(drive, params)
         t0 = self.static_tension()
         if not t0 > 0.0:
+            from .kinematic import loose_chain_error
+            loose = loose_chain_error(drive, self.params)
+            if loose is not None:
+                raise ValueError(f"the modal model (level 2) needs both spans in tension at rest "
+                                 f"(a string without tension has no transverse stiffness), "
+                                 f"but {loose}")
             raise ValueError(
                 f"the modal model (level 2) needs both spans in tension at rest, but the static "
                 f"span tension is {t0:g} N (a string without tension has no transverse "
@@ -142,10 +148,36 @@ class ModalModel(TorsionalModel):
         if q.size and np.max(q) > limit:
             raise SimulationDiverged(
                 f"modal model: a span's transverse amplitude reached {np.max(q):.3g} m at "
-                f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; a span "
-                "has probably gone slack (level 2 needs both spans in tension: raise "
-                "chain.pretension) or is in a parametric instability without enough damping "
-                "(modal.damping_ratio)")
+                f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; "
+                + self._divergence_cause(x))
+
+    def _divergence_cause(self, x: np.ndarray) -> str:
+        """The likeliest cause of a span amplitude beyond the string model, in words, from the
+        state (with a rigid shaft the driver speed is not in it: then all candidates)."""
+        d, r = self.drive, self.reference
+        t0 = self.static_tension()
+        f1 = float(np.min([self.modal_frequencies(t0, 0.0, s)[0] for s in ("upper", "lower")])
+                   ) / (2 * math.pi)
+        kick = max(R * (1 - math.cos(math.pi / n)) for R, n in
+                   ((d.driver.pitch_radius, d.n_driver), (d.driven.pitch_radius, d.n_driven)))
+        kick_ratio = kick / min(r["l_up"], r["l_low"])
+        polygon = (f"the polygonal action: the span ends move across the span by up to "
+                   f"{1e3 * kick:.3g} mm ({100 * kick_ratio:.2g} % of its length) at every "
+                   "seating, more than a string of small slope takes at this speed (few teeth, "
+                   "high speed: use fidelity 3)")
+        parametric = (f"a parametric resonance of the span's first mode ({f1:.4g} Hz at the "
+                      f"static tension) with the meshing frequency near twice it, without "
+                      "enough damping (raise modal.damping_ratio)")
+        slack = ("a span gone slack (its tension, less the centrifugal part, at zero: raise the "
+                 "static tension or lower load.torque)")
+        if self.rigid:
+            return f"causes: {slack}; {parametric}; or {polygon}"
+        f_mesh = d.n_driver * abs(float(x[2])) / (2 * math.pi)
+        if f_mesh > 0 and abs(f_mesh - 2 * f1) <= 0.25 * 2 * f1:
+            return (f"meshing frequency {f_mesh:.4g} Hz: likely {parametric}; else {slack}")
+        if kick_ratio > 0.01:
+            return f"meshing frequency {f_mesh:.4g} Hz: likely {polygon}; else {slack}"
+        return f"meshing frequency {f_mesh:.4g} Hz: likely {slack}; else {parametric}"
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
