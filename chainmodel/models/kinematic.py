@@ -16,8 +16,10 @@ R sin(theta - theta_s) (seed 000 eq 30's numerator and denominator). Torque bala
 with u/l the upper and lower span. A rigid chain cannot split these two unknowns; as in seed 004
 eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static span tension
 (the chain's pre-strain plus the stretch the centre distance forces on the span links, the
-seated links being held by rigid seats). A span cannot push: if one tension would be negative
-it is zero and the other carries the whole torque.
+seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
+A span cannot push: if one tension would be negative it is zero and the other carries the whole
+torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
+torques), and the tight span is the one with the larger tension (docs/stability.md).
 """
 
 from __future__ import annotations

@@ -11,7 +11,9 @@ length, and the Galerkin equations (eq 58 in dimensional form) are::
         + 2 zeta m omega_1 q_m' = -(G_m - E_m) Y1'' - E_m Y2'' - (2 S / lbar)(Y2' - Y1') G_m
                                   + g_n G_m
 
-with T the span's tension including the modal stretching sum (m pi)^2 q_m^2 / (4 lbar) (eq 46:
+with T the span's material tension: the elastic tension including the modal stretching sum
+(m pi)^2 q_m^2 / (4 lbar), plus the centrifugal tension rho A S^2, so that T - rho A S^2 is the
+elastic tension (docs/stability.md, "Centrifugal tension"; eq 46:
 the parametric coupling through the sprocket rotations, the wrapping-length variation p_o* and
 the cubic stiffening kappa_m all come from this one tension), and that same tension acts on the
 sprockets (eq 56's integral term). g_n: gravity across the span (0 in seed 004). The endpoint

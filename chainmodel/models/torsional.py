@@ -18,7 +18,8 @@ release. Its tension comes from its stretch::
 
 with p_free = p - pretension / k_link the free link length and k_eff = k_link / n (links in
 series; with ``torsional.seat_compliance`` the seats' ladder compliance is added in series). A span
-cannot push: at zero stretch or zero tension it goes slack, and that switch is an event of the
+cannot push: at zero stretch or zero tension it goes slack (the outputs add the centrifugal
+tension rho A v^2 on top, docs/stability.md), and that switch is an event of the
 steppers (:meth:`TorsionalModel.switching_functions`), as are the seating and release events at
 all four span ends. At zero stretch the spans lie exactly where level 0 puts them, so polygonal
 action and the varying wrapping length excite the drive by themselves.
