@@ -83,11 +83,10 @@ class Stepper(ABC):
             raise ValueError(f"communication point t_end = {t_end!r} s is before the current "
                              f"time {self.t!r} s")
         source = self._source(inputs)
-        for tt in (self.t, t_end):      # the model's input bounds (Model.input_error)
-            u = source(tt)
-            why = self.model.input_error(u.angle, u.speed, u.torque)
-            if why is not None:
-                raise ValueError(f"step to t = {t_end:.9g} s refused: {why}")
+        u = source(t_end)       # the model's input bounds (Model.input_error); a held input's
+        why = self.model.input_error(u.angle, u.speed, u.torque)   # speed and load are the
+        if why is not None:                                        # start's, its angle is last
+            raise ValueError(f"step to t = {t_end:.9g} s refused: {why}")
         wall = time.perf_counter()
         if self.model.n_states and t_end > self.t:
             self._integrate(self.t, t_end, source)

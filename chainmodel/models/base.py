@@ -253,6 +253,14 @@ class Model(ABC):
         |input_shaft.speed| <= :meth:`speed_limit`, |load.torque| <= :meth:`torque_limit`.
         The steppers and the FMU call it before every step."""
         from . import limits
+        bounds = self.__dict__.get("_input_bounds")
+        try:
+            ok = (bounds is not None and abs(angle) <= limits.ANGLE_LIMIT
+                  and abs(speed) <= bounds[0] and abs(torque) <= bounds[2])
+        except TypeError:
+            ok = False
+        if ok:                 # the common case, cheaply (called before every step)
+            return None
         for name, value in (("input_shaft.angle", angle), ("input_shaft.speed", speed),
                             ("load.torque", torque)):
             if not isinstance(value, (int, float, np.floating, np.integer)) or \
@@ -262,7 +270,6 @@ class Model(ABC):
             return (f"input input_shaft.angle = {angle:.6g} rad is beyond +-{limits.ANGLE_LIMIT:g}"
                     " rad, where a double no longer resolves a micro-radian; restart the angle "
                     "count (it is periodic)")
-        bounds = self.__dict__.get("_input_bounds")
         if bounds is None:   # the parameters are fixed for a model's life: compute once
             bounds = self.__dict__["_input_bounds"] = (*self.speed_limit(), self.torque_limit())
         w_max, why, t_max = bounds
