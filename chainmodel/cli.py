@@ -380,6 +380,10 @@ def cmd_run(args) -> int:
         print_json(out)
     elif not args.quiet:
         print(_run_table(out, scene))
+    if args.quiet or args.json:   # the table shows them; otherwise they go to stderr
+        for text in out.get("warnings", ()):
+            sys.stderr.write(f"chainmodel: warning: {text}\n")
+    if not args.json and not args.quiet:
         for what, path in written:
             print(f"wrote {what} to {path}")
     return 0
@@ -410,6 +414,8 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
     ]
     for k, note in enumerate(s["notes"]):
         rows.append(("notes" if k == 0 else "", note))
+    for k, text in enumerate(s.get("warnings", ())):
+        rows.append(("WARNING" if k == 0 else "", text))
     return _table(rows)
 
 

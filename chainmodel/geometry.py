@@ -125,29 +125,34 @@ class Drive:
 
     def __post_init__(self):
         set_ = object.__setattr__
-        set_(self, "n_driver", check_teeth("driver sprocket (n_driver)", self.n_driver))
-        set_(self, "n_driven", check_teeth("driven sprocket (n_driven)", self.n_driven))
-        set_(self, "pitch", check_positive("pitch", self.pitch))
+        set_(self, "n_driver", check_teeth("driver sprocket n_driver (drive.driver_teeth)",
+                                           self.n_driver))
+        set_(self, "n_driven", check_teeth("driven sprocket n_driven (drive.driven_teeth)",
+                                           self.n_driven))
+        set_(self, "pitch", check_positive("pitch (drive.pitch)", self.pitch))
         set_(self, "span_pitches", check_whole("span_pitches (N)", self.span_pitches, 1))
         set_(self, "pitch_fraction", check_fraction("pitch_fraction (f)", self.pitch_fraction))
         if self.links is not None:
-            set_(self, "links", check_whole("links (M)", self.links, 4))
+            set_(self, "links", check_whole("links M (drive.links)", self.links, 4))
         gap = self.centre_distance - (self.driver.pitch_radius + self.driven.pitch_radius)
         if gap <= 0.0:
             raise ValueError(
-                f"the sprockets overlap: centre distance {self.centre_distance:.6g} m is less than "
-                f"the sum of the pitch radii {self.driver.pitch_radius + self.driven.pitch_radius:.6g} m; "
-                f"use a longer span (span_pitches = {self.span_pitches}) or smaller sprockets")
+                f"the sprockets overlap: centre distance (drive.centre_distance) "
+                f"{self.centre_distance:.6g} m is less than the sum of the pitch radii "
+                f"{self.driver.pitch_radius + self.driven.pitch_radius:.6g} m; use a longer span "
+                f"(span_pitches = {self.span_pitches}) or smaller sprockets")
         if self.links is not None:
             # Lazy import: the wrapping module needs this class.
             from .kinematics.wrapping import wrap_length_range
             lmin, _, _ = wrap_length_range(self)
             if self.links * self.pitch < lmin * (1.0 - 2e-3):
                 raise ValueError(
-                    f"a chain of {self.links} links is too short to wrap this drive: it needs at "
-                    f"least {lmin / self.pitch:.3f} pitches at centre distance "
-                    f"{self.centre_distance:.6g} m (more than 0.2 % stretch); use more links or a "
-                    f"shorter centre distance")
+                    f"a chain of {self.links} links (drive.links) is too short to wrap this "
+                    f"drive: it needs at least {lmin / self.pitch:.3f} pitches at centre distance "
+                    f"{self.centre_distance:.6g} m (more than 0.2 % stretch); use at least "
+                    f"{math.ceil(lmin * (1.0 - 2e-3) / self.pitch - 1e-9)} links, a shorter "
+                    f"drive.centre_distance, or drive.centre_distance = 0 (the distance at which "
+                    f"the links wrap tightly)")
 
     # sprockets
     @property
@@ -201,10 +206,11 @@ class Drive:
                              name: str = "") -> "Drive":
         """The drive whose shafts are ``centre_distance`` apart (the inverse of eq 5: N and f
         from the tangent length x_c = sqrt(|OC|^2 - y_c^2))."""
-        n_driver = check_teeth("driver sprocket (n_driver)", n_driver)
-        n_driven = check_teeth("driven sprocket (n_driven)", n_driven)
-        pitch = check_positive("pitch", pitch)
-        centre_distance = check_positive("centre_distance", centre_distance)
+        n_driver = check_teeth("driver sprocket n_driver (drive.driver_teeth)", n_driver)
+        n_driven = check_teeth("driven sprocket n_driven (drive.driven_teeth)", n_driven)
+        pitch = check_positive("pitch (drive.pitch)", pitch)
+        centre_distance = check_positive("centre_distance (drive.centre_distance)",
+                                         centre_distance)
         y_c = Sprocket(n_driven, pitch).inscribed_radius - Sprocket(n_driver, pitch).inscribed_radius
         # Valid range: pitch circles apart (R_c + R_o) and N >= 1 (x_c >= 2 p); one bound
         # for both, so the message never suggests a distance that fails the other check.
@@ -214,7 +220,7 @@ class Drive:
             why = ("the pitch circles overlap" if centre_distance <= radii
                    else "the tight span would hold less than one whole pitch")
             raise ValueError(
-                f"centre_distance must exceed {least:.6g} m for sprockets of {n_driver} and "
+                f"drive.centre_distance must exceed {least:.6g} m for sprockets of {n_driver} and "
                 f"{n_driven} teeth at pitch {pitch:.6g} m, got {centre_distance:.6g} m: {why}")
         span, frac = split_tangent_length(math.sqrt(centre_distance**2 - y_c**2), pitch)
         return cls(n_driver, n_driven, pitch, span, frac, links, name)

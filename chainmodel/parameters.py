@@ -145,8 +145,10 @@ PARAMETERS: tuple[Parameter, ...] = (
        "frame-indifferent, so wrapped links turning with a sprocket do not dissipate)",
        minimum=0.0, levels=(3,)),
     _p("chain.pretension", 0.0, "N",
-       "extra static tension from a chain pre-strain: every link's free length is "
-       "p - pretension / link_stiffness (adds to the tension the centre distance gives)",
+       "pre-strain of every link, at every level: its free length is "
+       "p - pretension / link_stiffness (the tension of a link held at the pitch); refused on a "
+       "chain longer than its wrapping length; the scene setting static_tension solves it for "
+       "a given static span tension at the level that runs (docs/stability.md)",
        minimum=0.0),
     _p("chain.roller_radius", _ROLLER_RADIUS, "m",
        "roller radius R_r (not in seed 003; ISO 606 10B, d1 = 10.16 mm)", minimum=0.0,
@@ -195,8 +197,9 @@ PARAMETERS: tuple[Parameter, ...] = (
        "put the seated rollers' contact compliance in series with each span at levels 0-2 "
        "(level 0: in its static tension only): "
        "each span end adds 1/K_seat, K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (a ladder "
-       "of seat springs contact.stiffness and links), plus the roller-seat clearance "
-       "(docs/reduced_models.md)", kind=bool, levels=(0, 1, 2)),
+       "of seat springs contact.stiffness and links, loaded by the span's tension less the "
+       "wrapped links' own), plus the roller-seat clearance (docs/reduced_models.md)",
+       kind=bool, levels=(0, 1, 2)),
     _p("torsional.mean_link_compliance", True, "",
        "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
        "tooth-period-mean link count n, while its stretch follows the current count: the tension "

@@ -147,9 +147,97 @@ def scene_names() -> list[str]:
     return preset_names()
 
 
+class _Slack(Exception):
+    """A probe pretension left the chain slack (static tension 0)."""
+
+
+def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float) -> float:
+    """Model.static_tension() of ``level`` with ``chain.pretension = pretension``; 0 where the
+    pretension leaves the chain slack (which the models refuse to build)."""
+    from .models.kinematic import pretension_error, static_span_tension
+    trial = dict(params, **{"chain.pretension": pretension})
+    if pretension > 0 and pretension_error(drive, trial) is not None:
+        return 0.0
+    if level <= 2:   # the levels 0-2 share it (level 2 refuses to build at zero tension)
+        return static_span_tension(drive, trial)
+    return float(model_class(level)(drive, trial).static_tension())
+
+
+@lru_cache(maxsize=128)
+def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) -> float:
+    """The chain.pretension at which ``level``'s own Model.static_tension() is ``target`` [N].
+
+    T(pretension) is non-decreasing and piecewise affine wherever the chain is taut (the
+    wrapped links' seats add a kink, level 3 its contacts): bracket the target, then regula
+    falsi (Illinois) to 1e-6 relative or 1e-3 N. Refuses a target below T(0), the tension the
+    centre distance gives alone, and one that needs more than the small-strain bound of
+    chain.pretension."""
+    from .models.kinematic import loose_chain_error
+    params = dict(frozen)
+    t0 = _static_tension_at(level, drive, params, 0.0)
+    loose = loose_chain_error(drive, params) if target > t0 else None
+    if loose is not None:
+        raise ValueError(f"static_tension {target:g} N is refused: {loose}")
+    tol = max(1e-3, 1e-6 * target)
+    if not math.isfinite(t0):
+        raise ValueError(f"static_tension cannot be set at fidelity {level}: the level reports "
+                         "no static tension")
+    if target < t0 - tol:
+        raise ValueError(f"static_tension {target:g} N is below the {t0:.4g} N the centre "
+                         f"distance already gives at fidelity {level}; shorten "
+                         "drive.centre_distance (or use more links)")
+    if abs(target - t0) <= tol:
+        return 0.0
+    limit = 0.05 * params["chain.link_stiffness"] * params["drive.pitch"] * (1 - 1e-9)
+    lo, f_lo = 0.0, t0 - target
+    hi = min(max(target - t0, 1.0), limit)
+    f_hi = _static_tension_at(level, drive, params, hi) - target
+    while f_hi < 0:
+        if hi >= limit:
+            raise ValueError(f"static_tension {target:g} N needs a chain.pretension beyond "
+                             f"{limit:.4g} N (5 % pre-strain) at fidelity {level}; use a longer "
+                             "drive.centre_distance or fewer links")
+        lo, f_lo = hi, f_hi
+        hi = min(2.0 * hi, limit)
+        f_hi = _static_tension_at(level, drive, params, hi) - target
+    side = 0
+    for _ in range(60):
+        x = hi if f_hi == f_lo else hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        x = min(max(x, lo), hi)
+        f = _static_tension_at(level, drive, params, x) - target
+        if abs(f) <= tol:
+            return x
+        if hi - lo <= 1e-9 * hi:
+            # a jump: the level is already above the target where the pretension first takes
+            # up the chain's slack (pretension_error refuses anything less)
+            raise ValueError(
+                f"static_tension {target:g} N cannot be reached at fidelity {level}: the "
+                f"smallest chain.pretension that takes up this chain's slack ({hi:.6g} N) "
+                f"already gives {target + f_hi:.4g} N; use fewer drive.links or a longer "
+                "drive.centre_distance")
+        if f > 0:
+            hi, f_hi = x, f
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        else:
+            lo, f_lo = x, f
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+    return x  # pragma: no cover - regula falsi on a monotone function converges
+
+
+_STATIC_NOTE = "for a static span tension of"
+
+
 @dataclass
 class Scene:
-    """A runnable scene (see module docstring)."""
+    """A runnable scene (see module docstring).
+
+    ``static_tension`` [N], when set, is the static span tension at rest with no load that the
+    scene asks for: the scene solves chain.pretension against its fidelity level's own
+    Model.static_tension(), so it holds at whichever level runs (docs/stability.md)."""
 
     name: str
     parameters: dict[str, Any]
@@ -157,6 +245,7 @@ class Scene:
     duration: float = 1.0
     output_interval: float = 1e-4
     notes: list[str] = field(default_factory=list)
+    static_tension: float | None = None
 
     def __post_init__(self):
         self.parameters = P.validate(self.parameters)
@@ -165,6 +254,17 @@ class Scene:
         if self.output_interval > self.duration:
             raise ValueError(f"output_interval ({self.output_interval:g} s) must not exceed "
                              f"duration ({self.duration:g} s)")
+        if self.static_tension is not None:
+            target = check_positive("static_tension", self.static_tension, allow_zero=True)
+            self.static_tension = target
+            params = dict(self.parameters, **{"chain.pretension": 0.0})
+            drive = self.drive_for(params)
+            level = params["fidelity"]
+            pre = _solve_pretension(level, drive, tuple(sorted(params.items())), target)
+            self.parameters = P.validate({"chain.pretension": pre}, self.parameters)
+            self.notes = [n for n in self.notes if _STATIC_NOTE not in n] + [
+                f"chain.pretension = {pre:.6g} N {_STATIC_NOTE} {target:g} N at fidelity "
+                f"{level}"]
 
     # --- construction --------------------------------------------------------------------
     @classmethod
@@ -175,17 +275,19 @@ class Scene:
         spec = _preset_scene(name)
         scene = cls(spec["name"], dict(spec["parameters"]), spec["operating"], spec["duration"],
                     spec["output_interval"], list(spec["notes"]))
-        if spec.get("static_tension") is not None:
-            from .models.kinematic import static_span_tension
-            geometric = static_span_tension(scene.drive, dict(scene.parameters,
-                                                              **{"chain.pretension": 0.0}))
-            if spec["static_tension"] >= geometric:
-                scene = scene.with_static_tension(spec["static_tension"])
+        scene = scene.with_overrides(**overrides) if overrides else scene
+        explicit = {"static_tension", "chain_pretension", "chain.pretension"} & set(overrides)
+        if spec.get("static_tension") is not None and not explicit:
+            target = spec["static_tension"]
+            params = dict(scene.parameters, **{"chain.pretension": 0.0})
+            geometric = _static_tension_at(scene.fidelity, scene.drive_for(params), params, 0.0)
+            if target >= geometric:
+                scene = scene.with_overrides(static_tension=target)
             else:
                 scene.notes.append(f"the centre distance alone gives a static span tension of "
-                                   f"{geometric:.4g} N, more than the {spec['static_tension']:g} N "
-                                   "of Table 2; kept")
-        return scene.with_overrides(**overrides) if overrides else scene
+                                   f"{geometric:.4g} N at fidelity {scene.fidelity}, more than "
+                                   f"the {target:g} N of Table 2; kept")
+        return scene
 
     @classmethod
     def from_toml(cls, path: str | Path, **overrides) -> "Scene":
@@ -222,6 +324,14 @@ class Scene:
         op = self.operating
         duration, interval = self.duration, self.output_interval
         static = kw.pop("static_tension", None)
+        pretension_given = ("chain.pretension" in (parameters or {})
+                            or kw.get("chain_pretension") is not None
+                            or kw.get("chain.pretension") is not None)
+        if static is not None and pretension_given:
+            raise ValueError("give either static_tension or chain.pretension, not both: "
+                             "static_tension sets chain.pretension")
+        if static is None and not pretension_given:
+            static = self.static_tension     # keep the target: re-solved at the new level
         by_underscore = {n.replace(".", "_"): n for n in P.BY_NAME}
         for key, value in kw.items():
             if value is None:
@@ -248,37 +358,15 @@ class Scene:
                 raise ValueError(f"unknown scene setting {key!r}; valid: fidelity, duration, "
                                  "output_interval, input_speed_rpm, ramp_time, load_torque, "
                                  "static_tension, or a parameter name (see chainmodel.parameters)")
-        scene = Scene(self.name, params, op, duration, interval, list(self.notes))
-        return scene.with_static_tension(static) if static is not None else scene
+        notes = list(self.notes)
+        if static is None:
+            notes = [n for n in notes if _STATIC_NOTE not in n]
+        return Scene(self.name, params, op, duration, interval, notes, static)
 
     def with_static_tension(self, tension: float) -> "Scene":
-        """Set chain.pretension so that the static span tension at rest (rigid seats, no load)
-        equals ``tension`` [N]; refuses a value below what the centre distance alone gives."""
-        from .models.kinematic import static_span_tension
-        tension = check_positive("static_tension", tension, allow_zero=True)
-        params = dict(self.parameters, **{"chain.pretension": 0.0})
-        drive = self.drive_for(params)
-        geometric = static_span_tension(drive, params)
-        if tension < geometric - 1e-9:
-            raise ValueError(f"static_tension {tension:g} N is below the {geometric:.4g} N the "
-                             "centre distance already gives; shorten drive.centre_distance")
-        # T is affine in the pre-strain tension while it is positive (slope 1 with rigid seats,
-        # less with seat compliance): solve it from a probe well inside the positive range.
-        probe = tension + 1000.0
-        slope = (static_span_tension(drive, dict(params, **{"chain.pretension": probe}))
-                 - geometric) / probe if geometric > 0 else None
-        if slope is None or slope <= 0:
-            hi = dict(params, **{"chain.pretension": 2 * probe})
-            t_hi = static_span_tension(drive, hi)
-            t_lo = static_span_tension(drive, dict(params, **{"chain.pretension": probe}))
-            slope = (t_hi - t_lo) / probe
-            pre = probe + (tension - t_lo) / slope
-        else:
-            pre = (tension - geometric) / slope
-        params["chain.pretension"] = max(0.0, pre)
-        return Scene(self.name, params, self.operating, self.duration, self.output_interval,
-                     self.notes + [f"chain.pretension = {params['chain.pretension']:.4g} N for a "
-                                   f"static span tension of {tension:g} N"])
+        """A copy whose chain.pretension gives the static span tension ``tension`` [N] at rest
+        with no load at this scene's fidelity level (and at any level it is moved to)."""
+        return self.with_overrides(static_tension=tension)
 
     # --- derived ---------------------------------------------------------------------------
     @property
@@ -297,6 +385,20 @@ class Scene:
 
     def inputs(self, t: float) -> Inputs:
         return self.operating.inputs(t)
+
+    def check_operating_point(self, model: Model) -> None:
+        """Refuse, before running, an operating point beyond what ``model`` holds to
+        (:meth:`Model.input_error`: the level's speed limit, the small-strain load bound):
+        ValueError naming the scene setting, its value and the valid range. The profile
+        ramps from rest to the operating speed, so the extremes are that speed and the load."""
+        op = self.operating
+        why = model.input_error(0.0, op.speed, op.load_torque)
+        if why is None:
+            return
+        setting = ("input_speed_rpm" if "input_shaft.speed" in why else
+                   "load_torque" if "load.torque" in why else "operating point")
+        raise ValueError(f"scene setting {setting} refused at fidelity {model.level} "
+                         f"({model.name}): {why}")
 
     def input_arrays(self, times):
         """The inputs at many times: (angle, speed, acceleration, torque) arrays

@@ -61,6 +61,12 @@ class Result:
         from .analysis.summary import summarise
         return summarise(self)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What the summary warns about (a short steady window, an output interval that cannot
+        resolve the meshing frequency); the CLI prints them."""
+        return list(self.summary()["warnings"])
+
     def to_csv(self, path: str | Path) -> Path:
         path = Path(path)
         with path.open("w", newline="") as fh:
@@ -149,6 +155,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     same numbers as the per-point loop (``batched=False``, one ``Stepper.advance`` per point as
     the FMU steps), without its Python overhead per point."""
     model = scene.model()
+    scene.check_operating_point(model)
     times = scene.times()
     if model.n_states == 0 and hasattr(model, "evaluate") and not snapshot_every:
         # stateless level: every sample at once (vectorised over time)

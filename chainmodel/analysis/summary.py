@@ -11,13 +11,25 @@ __all__ = ["steady_window", "dominant_frequency", "tooth_ratio", "summarise"]
 
 def steady_window(time: np.ndarray, ramp_time: float, duration: float) -> np.ndarray:
     """Mask of the samples treated as steady state: after the ramp and after the first half of
-    the run (start-up transients of the dynamic levels have decayed by then for the presets)."""
+    the run (start-up transients of the dynamic levels have decayed by then for the presets).
+
+    Never a sample before that start (a coarse output interval used to pull in the start-up,
+    t = 0 included): with fewer than two samples there, the samples after the ramp; with fewer
+    than two of those, the last sample alone. :func:`summarise` warns when the window is
+    short."""
+    time = np.asarray(time, float)
     start = max(ramp_time, 0.5 * duration)
     mask = time >= start - 1e-12
-    if mask.sum() < 8:
+    if mask.sum() < 2:
+        mask = time >= ramp_time - 1e-12
+    if mask.sum() < 2:
         mask = np.zeros_like(time, bool)
-        mask[-max(8, len(time) // 2):] = True
+        mask[-1] = True
     return mask
+
+
+#: fewer steady samples than this and the summary warns
+STEADY_SAMPLES = 8
 
 
 def dominant_frequency(time: np.ndarray, signal: np.ndarray) -> tuple[float, float]:
@@ -62,6 +74,20 @@ def summarise(result) -> dict:
     drive = scene.drive
     freq, df = dominant_frequency(t[mask], result["driven.speed"][mask])
     mean_speed = float(np.mean(result["driver.speed"][mask]))
+    warnings = []
+    n_steady = int(mask.sum())
+    if n_steady < STEADY_SAMPLES:
+        warnings.append(f"the steady window from {float(t[mask][0]):g} s holds only {n_steady} "
+                        f"sample(s): the means and peaks are rough; use a smaller output "
+                        f"interval (now {scene.output_interval:g} s) or a longer run")
+    mesh = abs(mean_speed) * drive.n_driver / (2 * math.pi)
+    dt = float(np.mean(np.diff(t))) if len(t) > 1 else math.inf
+    if mesh > 0 and mesh >= 0.5 / dt:
+        warnings.append(f"the output interval {dt:g} s cannot resolve the meshing frequency "
+                        f"{mesh:.4g} Hz (it needs less than {0.5 / mesh:.3g} s, two samples per "
+                        "tooth period): the dominant frequency would be an alias and is not "
+                        "reported, and the peaks miss the tooth-periodic ripple")
+        freq = math.nan
     out = {
         "scene": scene.name,
         "fidelity": result.fidelity_name,
@@ -81,8 +107,9 @@ def summarise(result) -> dict:
         "driven_speed_ripple_rms_rad_s": float(np.std(result["driven.speed"][mask])),
         "dominant_frequency_hz": freq,
         "frequency_resolution_hz": df,
-        "meshing_frequency_hz": abs(mean_speed) * drive.n_driver / (2 * math.pi),
+        "meshing_frequency_hz": mesh,
         "wall_time_s": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else math.inf,
+        "warnings": warnings,
     }
     return out

@@ -260,7 +260,7 @@ def centre_distance_for_links(n_driver: int, n_driven: int, pitch: float, links:
         lo_val = math.nan
     if not (lo_val < 0):
         raise ValueError(
-            f"a chain of {links} links is too short to wrap sprockets of {n_driver} and "
+            f"a chain of {links} links (drive.links) is too short to wrap sprockets of {n_driver} and "
             f"{n_driven} teeth at any centre distance that keeps them apart; use more links")
     # each extra pitch of tangent length adds about two pitches of wrapping length
     x_hi = x_lo + max(links / 2.0, 2.0)

@@ -23,7 +23,7 @@ import numpy as np
 from ..geometry import Drive
 
 __all__ = ["Inputs", "OutputSpec", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "ALL_OUTPUTS", "Model",
-           "SimulationDiverged", "quasi_static_extras", "QUASI_STATIC"]
+           "SimulationDiverged", "quasi_static_extras", "QUASI_STATIC", "centrifugal_tension"]
 
 
 class SimulationDiverged(RuntimeError):
@@ -70,8 +70,12 @@ CORE_OUTPUTS: tuple[OutputSpec, ...] = (
     OutputSpec("driven.acceleration", "rad/s2", "driven sprocket angular acceleration"),
     OutputSpec("input_shaft.torque", "N.m",
                "torque the drive takes from the input shaft (feed back to the motor)"),
-    OutputSpec("tight_span.tension", "N", "tension of the span the driver pulls"),
-    OutputSpec("slack_span.tension", "N", "tension of the return span"),
+    OutputSpec("tight_span.tension", "N",
+               "tension of the tight span, the one carrying the larger tension (with a load that "
+               "resists the motion the span the driver pulls; with an overrunning load the one "
+               "the driven sprocket pulls), centrifugal tension included"),
+    OutputSpec("slack_span.tension", "N", "tension of the other (slack) span, centrifugal "
+               "tension included"),
     OutputSpec("tight_span.length", "m", "distance between the tight span's endpoint rollers"),
     OutputSpec("velocity_ratio", "", "driven speed / driver speed (instantaneous)"),
     OutputSpec("transmission_error", "rad",
@@ -92,16 +96,20 @@ QUASI_STATIC = "quasi-static estimate at this fidelity level: "
 
 
 def quasi_static_extras(drive: Drive, params: Mapping[str, Any], tight, slack,
-                        tight_length) -> dict[str, np.ndarray]:
+                        tight_length, centrifugal=0.0) -> dict[str, np.ndarray]:
     """Level 2-3 outputs estimated from the span tensions, for the levels that do not model them
-    (vectorised over samples).
+    (vectorised over samples). ``tight`` and ``slack`` are the effective (elastic) tensions,
+    without the centrifugal tension ``centrifugal`` = rho A v^2 that the spans carry on top
+    (docs/stability.md, "Centrifugal tension"):
 
     * midspan deflection: static sag of a string of mass per length m/p under its own weight,
       g cos(inclination) (m/p) l^2 / (8 T), reported negative (towards gravity); a span without
-      tension reports the geometric bound l / 2;
-    * largest link tension: the larger span tension;
+      tension reports the geometric bound l / 2. A moving string sags under the effective
+      tension (T - rho A v^2 of the moving-string equation);
+    * largest link tension: the larger span tension, centrifugal tension included;
     * largest contact force: with rigid seats the first seated roller on the driver takes at
-      most the tight-span tension, which is what we report.
+      most the tight-span tension (the effective one: the centrifugal part is balanced by the
+      wrapped chain's centripetal acceleration, not by the seats), which is what we report.
     """
     tight, slack, tight_length = (np.asarray(v, float) for v in (tight, slack, tight_length))
     rho = params["chain.link_mass"] / drive.pitch
@@ -111,8 +119,27 @@ def quasi_static_extras(drive: Drive, params: Mapping[str, Any], tight, slack,
     sag = np.where((tight > 0) & np.isfinite(sag), np.minimum(sag, tight_length / 2),
                    tight_length / 2)
     return {"tight_span.midspan_deflection": -sag,
-            "chain.max_link_tension": np.maximum(tight, slack),
+            "chain.max_link_tension": np.maximum(tight, slack) + centrifugal,
             "contact.max_force": tight.copy()}
+
+
+def centrifugal_tension(drive: Drive, params: Mapping[str, Any], driver_speed):
+    """Centrifugal tension rho A v^2 [N] of a chain running at the mean chain speed
+    v = n_driver p w / 2 pi (ISO 10823's F_c = q v^2; derivation in docs/stability.md):
+    added to both spans' tension at levels 0-2, not to the sprocket torques."""
+    v = drive.n_driver * drive.pitch * np.asarray(driver_speed, float) / (2 * math.pi)
+    return params["chain.link_mass"] / drive.pitch * v * v
+
+
+def check_pretension(drive: Drive, params: Mapping[str, Any]) -> None:
+    """Every level refuses a ``chain.pretension`` that leaves the chain slack at rest
+    (:func:`chainmodel.models.kinematic.pretension_error`; one definition of pretension)."""
+    if "chain.pretension" not in params:
+        return
+    from .kinematic import pretension_error
+    why = pretension_error(drive, params)
+    if why is not None:
+        raise ValueError(why)
 
 
 class Model(ABC):
@@ -132,6 +159,7 @@ class Model(ABC):
             raise ValueError("a dynamic scene needs the chain's number of links (drive.links)")
         self.drive = drive
         self.params = dict(params)
+        check_pretension(drive, self.params)
 
     # --- state ---------------------------------------------------------------------------
     @property
@@ -202,3 +230,58 @@ class Model(ABC):
         """Static span tension at rest with no load [N] (what the centre distance and
         pre-strain give this level); nan where not defined."""
         return math.nan
+
+    # --- where the level is valid (models/limits.py, docs/stability.md) ---------------------
+    def speed_limit(self) -> tuple[float, str]:
+        """(largest |input_shaft.speed| [rad/s] this level is valid to, the reason in words).
+        Default, every level: the speed at which the centrifugal tension rho A v^2 alone
+        strains the chain by limits.STRAIN_LIMIT."""
+        from . import limits
+        w = limits.centrifugal_speed_limit(self.drive, self.params)
+        return w, (f"the centrifugal tension rho A v^2 would strain the chain by more than "
+                   f"{100 * limits.STRAIN_LIMIT:g} %")
+
+    def torque_limit(self) -> float:
+        """Largest |load.torque| [N.m]: the tight span would carry torque / R_driven, at most
+        limits.tension_limit (small strain)."""
+        from . import limits
+        return limits.tension_limit(self.drive, self.params) * self.drive.driven.pitch_radius
+
+    def input_error(self, angle: float, speed: float, torque: float) -> str | None:
+        """None if the inputs are acceptable, else one sentence naming the input, its value and
+        what is valid: finite values, |input_shaft.angle| <= limits.ANGLE_LIMIT,
+        |input_shaft.speed| <= :meth:`speed_limit`, |load.torque| <= :meth:`torque_limit`.
+        The steppers and the FMU call it before every step."""
+        from . import limits
+        bounds = self.__dict__.get("_input_bounds")
+        try:
+            ok = (bounds is not None and abs(angle) <= limits.ANGLE_LIMIT
+                  and abs(speed) <= bounds[0] and abs(torque) <= bounds[2])
+        except TypeError:
+            ok = False
+        if ok:                 # the common case, cheaply (called before every step)
+            return None
+        for name, value in (("input_shaft.angle", angle), ("input_shaft.speed", speed),
+                            ("load.torque", torque)):
+            if not isinstance(value, (int, float, np.floating, np.integer)) or \
+                    not math.isfinite(value):
+                return f"input {name} must be a finite number, got {value!r}"
+        if abs(angle) > limits.ANGLE_LIMIT:
+            return (f"input input_shaft.angle = {angle:.6g} rad is beyond +-{limits.ANGLE_LIMIT:g}"
+                    " rad, where a double no longer resolves a micro-radian; restart the angle "
+                    "count (it is periodic)")
+        if bounds is None:   # the parameters are fixed for a model's life: compute once
+            bounds = self.__dict__["_input_bounds"] = (*self.speed_limit(), self.torque_limit())
+        w_max, why, t_max = bounds
+        if abs(torque) > t_max:
+            return (f"input load.torque = {torque:.6g} N.m is beyond +-{t_max:.4g} N.m: the tight "
+                    f"span would carry {abs(torque) / self.drive.driven.pitch_radius:.4g} N, "
+                    f"more than {100 * limits.STRAIN_LIMIT:g} % strain of a link of "
+                    f"chain.link_stiffness = {self.params['chain.link_stiffness']:g} N/m where "
+                    f"the models hold; use a smaller load or chain.link_stiffness >= "
+                    f"{abs(torque) / self.drive.driven.pitch_radius / (limits.STRAIN_LIMIT * self.drive.pitch):.3g} N/m")
+        if abs(speed) > w_max:
+            return (f"input input_shaft.speed = {speed:.6g} rad/s ({speed / limits.RPM:.6g} rpm)"
+                    f" is beyond the {self.name} model's (level {self.level}) limit of "
+                    f"{w_max:.6g} rad/s ({w_max / limits.RPM:.6g} rpm): {why}")
+        return None

@@ -16,8 +16,10 @@ R sin(theta - theta_s) (seed 000 eq 30's numerator and denominator). Torque bala
 with u/l the upper and lower span. A rigid chain cannot split these two unknowns; as in seed 004
 eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static span tension
 (the chain's pre-strain plus the stretch the centre distance forces on the span links, the
-seated links being held by rigid seats). A span cannot push: if one tension would be negative
-it is zero and the other carries the whole torque.
+seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
+A span cannot push: if one tension would be negative it is zero and the other carries the whole
+torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
+torques), and the tight span is the one with the larger tension (docs/stability.md).
 """
 
 from __future__ import annotations
@@ -31,10 +33,12 @@ import numpy as np
 from ..geometry import Drive
 from ..kinematics import driven_rotation
 from ..kinematics.wrapping import chain_geometry, tooth_period_samples
-from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, quasi_static_extras)
+from . import limits
+from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension,
+                   check_pretension, quasi_static_extras)
 
 __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stiffness",
-           "seat_series_compliance"]
+           "seat_series_compliance", "seated_tension", "pretension_error", "loose_chain_error"]
 
 
 def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
@@ -48,43 +52,130 @@ def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
     return 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
 
 
-def seat_series_compliance(params: Mapping[str, Any]) -> tuple[float, float]:
+def seated_tension(params: Mapping[str, Any], teeth: int) -> float:
+    """Tension [N] of the links wrapped on a sprocket of ``teeth`` teeth at rest, with the
+    seats' compliance (``torsional.seat_compliance``; with rigid seats the links are held at the
+    pitch and carry ``chain.pretension``).
+
+    A wrapped roller pulled by two links of tension T sits at the bottom of its seat, the
+    clearance s = R_t - R_r inside the pitch circle and further in by the contact spring's
+    2 T sin(alpha) / k_c (alpha = pi / teeth), so a seated link spans
+    p - 2 (s + 2 T sin(alpha) / k_c) sin(alpha) and, pre-strained to the free length
+    p - pretension / k_link, carries
+    T = (pretension - 2 k_link s sin(alpha)) / (1 + 4 k_link sin^2(alpha) / k_c), >= 0
+    (a link does not push: below that the roller lies loose in its seat)."""
+    pre = params["chain.pretension"]
+    if not params["torsional.seat_compliance"]:
+        return pre
+    k, kc = params["chain.link_stiffness"], params["contact.stiffness"]
+    clearance = max(0.0, params["contact.seat_radius"] - params["chain.roller_radius"])
+    sa = math.sin(math.pi / teeth)
+    return max(0.0, (pre - 2.0 * k * clearance * sa) / (1.0 + 4.0 * k * sa * sa / kc))
+
+
+def seat_series_compliance(params: Mapping[str, Any], drive: Drive | None = None
+                           ) -> tuple[float, float]:
     """(extra compliance per span [m/N], extra free length per span [m]) of the seats when
-    ``torsional.seat_compliance`` is on: two span ends, each 1/K_seat (:func:`seat_stiffness`),
-    and the roller-seat clearance R_t - R_r taken up towards the span at each. (0, 0) with
-    rigid seats."""
+    ``torsional.seat_compliance`` is on; (0, 0) with rigid seats.
+
+    A span end is held by the chain wrapped on its sprocket: the end roller on a seat spring,
+    tied by a link to the next seated roller and so on, a ladder of stiffness K_seat
+    (:func:`seat_stiffness`). The ladder gives way to the difference between the span's
+    tension T and the wrapped links' own tension T_w (:func:`seated_tension`, the pre-strain
+    they carry): the end moves towards the span by s + (T - T_w) / K_seat, s = R_t - R_r the
+    roller-seat clearance. Per span (one end on each sprocket) that is the compliance
+    2 / K_seat and the free length 2 s - (T_w,driver + T_w,driven) / K_seat; without ``drive``
+    the wrapped links are taken as unstrained (T_w = 0)."""
     if not params["torsional.seat_compliance"]:
         return 0.0, 0.0
     k_seat = seat_stiffness(params["contact.stiffness"], params["chain.link_stiffness"])
     clearance = max(0.0, params["contact.seat_radius"] - params["chain.roller_radius"])
-    return 2.0 / k_seat, 2.0 * clearance
+    wrapped = 0.0
+    if drive is not None:
+        wrapped = seated_tension(params, drive.n_driver) + seated_tension(params, drive.n_driven)
+    return 2.0 / k_seat, 2.0 * clearance - wrapped / k_seat
 
 
-def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
-    """Static span tension at rest, no load [N] (levels 0-2).
-
-    At rest the free driven sprocket turns until both spans carry the same tension. With rigid
-    seats only the span links stretch, so the centre distance's excess wrapping length L - M p
-    spreads over the n_u + n_l span links:
-    T0 = pretension + k_link * <(L - M p) / (n_u + n_l)> over a tooth period, and >= 0.
-    With ``torsional.seat_compliance`` the same stretch X = T0 (n_u + n_l) / k_link is shared
-    with the four seat compliances c and reduced by the four clearances s
-    (:func:`seat_series_compliance`): T = (X - 2 s) / ((n_u + n_l) / k_link + 2 c), >= 0.
-    """
-    pre = params["chain.pretension"]
-    if drive.links is None:
-        return pre
+def _rest_geometry(drive: Drive) -> tuple[float, float]:
+    """(excess L - M p, span link count n_u + n_l) at rest (four-bar), as tooth-period means:
+    the excess as <(L - M p) / (n_u + n_l)> <n_u + n_l>, the mean stretch of a span link."""
     phi1 = tooth_period_samples(drive, 100)
     phi2 = driven_rotation(drive, phi1).driven_angle
     g = chain_geometry(drive, phi1, phi2)
     links = g.upper_links + g.lower_links
-    stretch = (g.wrap_length - drive.links * drive.pitch) / links
-    t0 = max(0.0, pre + params["chain.link_stiffness"] * float(np.mean(stretch)))
-    c, slack = seat_series_compliance(params)
-    if c == 0.0 and slack == 0.0:
-        return t0
-    flex = float(np.mean(links)) / params["chain.link_stiffness"]
-    return max(0.0, (t0 * flex - 2.0 * slack) / (flex + 2.0 * c))
+    n = float(np.mean(links))
+    return float(np.mean((g.wrap_length - drive.links * drive.pitch) / links)) * n, n
+
+
+def _static_numerator(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
+    """(X, D) with the static span tension T = max(0, X / D) (:func:`static_span_tension`)."""
+    k = params["chain.link_stiffness"]
+    excess, links = _rest_geometry(drive)
+    c, free = seat_series_compliance(params, drive)
+    x = excess + links * params["chain.pretension"] / k - 2.0 * free
+    return x, links / k + 2.0 * c
+
+
+def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
+    """Static span tension at rest, no load [N] (levels 0-2; docs/stability.md, "Pretension").
+
+    ``chain.pretension`` is a pre-strain of every link: its free length is
+    p - pretension / k_link (the same at every level; level 3 builds its links so). At rest the
+    free driven sprocket turns until both spans carry the same tension T. The n_u + n_l span
+    links must stretch over the wrapping length's excess L - M p (tooth-period mean; the
+    rigid layout of seed 004 section 2) less their pre-strain, and each span's two ends give
+    way as :func:`seat_series_compliance` says (free length f, compliance c per span), so
+
+        T = max(0, (L - M p + (n_u + n_l) pretension / k_link - 2 f) / ((n_u + n_l) / k_link + 2 c)).
+
+    With rigid seats (f = c = 0) that is pretension + k_link (L - M p) / (n_u + n_l): the wrapped
+    links, held at the pitch, carry the pre-strain and the span links all of the excess. The
+    clamp at zero comes last (a slack chain; :func:`pretension_error` refuses a pretension
+    that does not take the slack up).
+    """
+    if drive.links is None:
+        return params["chain.pretension"]
+    x, d = _static_numerator(drive, params)
+    return max(0.0, x / d)
+
+
+def loose_chain_error(drive: Drive, params: Mapping[str, Any]) -> str | None:
+    """A sentence if the chain is longer than its wrapping length (tooth-period mean) by more
+    than the seats' clearances (2 (R_t - R_r) per span) take up, else None: such a chain hangs
+    slack at rest, and no pre-strain is a model of its tension (docs/stability.md)."""
+    if drive.links is None:
+        return None
+    excess, _ = _rest_geometry(drive)
+    clearance = max(0.0, params["contact.seat_radius"] - params["chain.roller_radius"])
+    if excess + 4.0 * clearance > 0.0:
+        return None
+    from ..geometry import Drive as _Drive
+    try:
+        tight = _Drive.from_links(drive.n_driver, drive.n_driven, drive.pitch, drive.links)
+        where = (f"drive.centre_distance = {tight.centre_distance:.6g} m (or 0) holds "
+                 f"{drive.links} links taut")
+    except ValueError:  # pragma: no cover - from_links refuses only impossible chains
+        where = "use a longer drive.centre_distance"
+    return (f"a chain of drive.links = {drive.links} is {-1e3 * excess:.3g} mm longer than its "
+            f"wrapping length at centre distance {drive.centre_distance:.6g} m, so it hangs "
+            f"slack at rest; {where}, or use fewer links")
+
+
+def pretension_error(drive: Drive, params: Mapping[str, Any]) -> str | None:
+    """A sentence if ``chain.pretension`` > 0 cannot be a pre-strain of this chain, else None;
+    every level refuses it (one definition of pretension, docs/stability.md): the chain is
+    longer than its wrapping length (:func:`loose_chain_error`), so a pre-strain would have
+    to take up whole links' slack, which the wrapped links then carry and the levels' seat
+    models treat too differently (xu2010 with 47 links: 1.2 kN at levels 0-2, 4.2 kN at
+    level 3 for the same 27 kN pretension). The criterion is geometric, the same at every
+    level."""
+    pre = params["chain.pretension"]
+    if pre <= 0.0 or drive.links is None:
+        return None
+    loose = loose_chain_error(drive, params)
+    if loose is not None:
+        return f"chain.pretension = {pre:g} N is refused: {loose}"
+    return None
 
 
 def split_tensions(sum_tension, arm_pull, arm_back, torque):
@@ -109,6 +200,7 @@ class KinematicModel(Model):
         # Level 0 runs without a link count (tensions then come from the pre-strain only).
         self.drive = drive
         self.params = dict(params)
+        check_pretension(drive, self.params)
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -119,6 +211,45 @@ class KinematicModel(Model):
 
     def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
         return np.empty(0)
+
+    @cached_property
+    def _frequencies(self) -> tuple[float, float]:
+        """(driven sprocket's torsional frequency with the driver held, spans' first axial
+        frequency) [Hz]: the modes this level treats as rigid. From the level-1 model of the
+        same drive (its mass matrix and span stiffness with the mean link counts); a drive
+        without a link count takes both spans at the upper span's N + 1 links."""
+        from .torsional import TorsionalModel
+        p = self.params
+        if self.drive.links is not None:
+            m1 = TorsionalModel(self.drive, dict(p, **{"input_shaft.rigid": True}))
+            r, c = m1.reference, m1.series_compliance()[0]
+            j22 = float(m1.mass_matrix()[1, 1])
+            n_up, n_low = r["n_up_min"], r["n_low_min"]
+            f_ax = m1.axial_frequency()
+        else:
+            c = seat_series_compliance(p)[0]
+            j22 = p["driven.inertia"]
+            n_up = n_low = self.drive.span_pitches + 1
+            f_ax = limits.span_axial_frequency(n_up, p, c)
+        k = sum(1.0 / (max(n, 1.0) / p["chain.link_stiffness"] + c) for n in (n_up, n_low))
+        ro = self.drive.driven.pitch_radius
+        return math.sqrt(k * ro * ro / j22) / (2 * math.pi), f_ax
+
+    def speed_limit(self) -> tuple[float, str]:
+        """Level 0 takes the chain as rigid and the driven sprocket as following it: valid while
+        the meshing frequency is below limits.QUASI_STATIC_RATIO of the driven sprocket's
+        torsional frequency on the spans and of the spans' first axial frequency (and below
+        the centrifugal strain bound of every level)."""
+        w_c, why_c = super().speed_limit()
+        f_t, f_ax = self._frequencies
+        which = ("driven sprocket's torsional" if f_t <= f_ax else "spans' first axial")
+        f = min(f_t, f_ax)
+        w = limits.speed_for_meshing(self.drive, limits.QUASI_STATIC_RATIO * f)
+        if w_c < w:
+            return w_c, why_c
+        return w, (f"the meshing frequency would exceed {limits.QUASI_STATIC_RATIO:g} x the "
+                   f"{which} natural frequency ({f:.4g} Hz), which the rigid chain of this level "
+                   "cannot follow; use fidelity 1 or higher, or a lower speed")
 
     @cached_property
     def _static_tension(self) -> float:
@@ -159,20 +290,26 @@ class KinematicModel(Model):
                                          g.lower.arm_end, load)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
-            tight, slack = (t_low, t_up) if rev else (t_up, t_low)
+            # the tight span is the one with the larger tension (ties: the one the driver
+            # winds on); under an overrunning load that is the span the driven sprocket pulls
+            upper = (t_up > t_low) | ((t_up == t_low) & (not rev))
             out["driver.angle"][sel] = angle[sel]
             out["driver.speed"][sel] = speed[sel]
             out["driven.angle"][sel] = rot.driven_angle
             out["driven.speed"][sel] = rot.driven_speed
             out["driven.acceleration"][sel] = rot.driven_acceleration
             out["input_shaft.torque"][sel] = tau_in
-            out["tight_span.tension"][sel] = tight
-            out["slack_span.tension"][sel] = slack
-            out["tight_span.length"][sel] = rot.span_length
+            out["tight_span.tension"][sel] = np.where(upper, t_up, t_low)
+            out["slack_span.tension"][sel] = np.where(upper, t_low, t_up)
+            out["tight_span.length"][sel] = np.where(upper, g.upper.length, g.lower.length)
             out["velocity_ratio"][sel] = rot.velocity_ratio
             out["transmission_error"][sel] = rot.driven_angle - drive.tooth_ratio * angle[sel]
+        centrifugal = centrifugal_tension(drive, p, speed)
         out.update(quasi_static_extras(drive, p, out["tight_span.tension"],
-                                       out["slack_span.tension"], out["tight_span.length"]))
+                                       out["slack_span.tension"], out["tight_span.length"],
+                                       centrifugal))
+        out["tight_span.tension"] += centrifugal
+        out["slack_span.tension"] += centrifugal
         return out
 
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:

@@ -11,7 +11,9 @@ length, and the Galerkin equations (eq 58 in dimensional form) are::
         + 2 zeta m omega_1 q_m' = -(G_m - E_m) Y1'' - E_m Y2'' - (2 S / lbar)(Y2' - Y1') G_m
                                   + g_n G_m
 
-with T the span's tension including the modal stretching sum (m pi)^2 q_m^2 / (4 lbar) (eq 46:
+with T the span's material tension: the elastic tension including the modal stretching sum
+(m pi)^2 q_m^2 / (4 lbar), plus the centrifugal tension rho A S^2, so that T - rho A S^2 is the
+elastic tension (docs/stability.md, "Centrifugal tension"; eq 46:
 the parametric coupling through the sprocket rotations, the wrapping-length variation p_o* and
 the cubic stiffening kappa_m all come from this one tension), and that same tension acts on the
 sprockets (eq 56's integral term). g_n: gravity across the span (0 in seed 004). The endpoint
@@ -71,6 +73,12 @@ class ModalModel(TorsionalModel):
         super().__init__(drive, params)
         t0 = self.static_tension()
         if not t0 > 0.0:
+            from .kinematic import loose_chain_error
+            loose = loose_chain_error(drive, self.params)
+            if loose is not None:
+                raise ValueError(f"the modal model (level 2) needs both spans in tension at rest "
+                                 f"(a string without tension has no transverse stiffness), "
+                                 f"but {loose}")
             raise ValueError(
                 f"the modal model (level 2) needs both spans in tension at rest, but the static "
                 f"span tension is {t0:g} N (a string without tension has no transverse "
@@ -142,10 +150,36 @@ class ModalModel(TorsionalModel):
         if q.size and np.max(q) > limit:
             raise SimulationDiverged(
                 f"modal model: a span's transverse amplitude reached {np.max(q):.3g} m at "
-                f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; a span "
-                "has probably gone slack (level 2 needs both spans in tension: raise "
-                "chain.pretension) or is in a parametric instability without enough damping "
-                "(modal.damping_ratio)")
+                f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; "
+                + self._divergence_cause(x))
+
+    def _divergence_cause(self, x: np.ndarray) -> str:
+        """The likeliest cause of a span amplitude beyond the string model, in words, from the
+        state (with a rigid shaft the driver speed is not in it: then all candidates)."""
+        d, r = self.drive, self.reference
+        t0 = self.static_tension()
+        f1 = float(np.min([self.modal_frequencies(t0, 0.0, s)[0] for s in ("upper", "lower")])
+                   ) / (2 * math.pi)
+        kick = max(R * (1 - math.cos(math.pi / n)) for R, n in
+                   ((d.driver.pitch_radius, d.n_driver), (d.driven.pitch_radius, d.n_driven)))
+        kick_ratio = kick / min(r["l_up"], r["l_low"])
+        polygon = (f"the polygonal action: the span ends move across the span by up to "
+                   f"{1e3 * kick:.3g} mm ({100 * kick_ratio:.2g} % of its length) at every "
+                   "seating, more than a string of small slope takes at this speed (few teeth, "
+                   "high speed: use fidelity 3)")
+        parametric = (f"a parametric resonance of the span's first mode ({f1:.4g} Hz at the "
+                      f"static tension) with the meshing frequency near twice it, without "
+                      "enough damping (raise modal.damping_ratio)")
+        slack = ("a span gone slack (its tension, less the centrifugal part, at zero: raise the "
+                 "static tension or lower load.torque)")
+        if self.rigid:
+            return f"causes: {slack}; {parametric}; or {polygon}"
+        f_mesh = d.n_driver * abs(float(x[2])) / (2 * math.pi)
+        if f_mesh > 0 and abs(f_mesh - 2 * f1) <= 0.25 * 2 * f1:
+            return (f"meshing frequency {f_mesh:.4g} Hz: likely {parametric}; else {slack}")
+        if kick_ratio > 0.01:
+            return f"meshing frequency {f_mesh:.4g} Hz: likely {polygon}; else {slack}"
+        return f"meshing frequency {f_mesh:.4g} Hz: likely {slack}; else {parametric}"
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
@@ -155,11 +189,11 @@ class ModalModel(TorsionalModel):
             " (sum of the span's Galerkin modes at its middle)")
         return d
 
-    def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
-        return float(aux[S.A_MID_UP] if forward else aux[S.A_MID_LOW])
+    def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
+        return float(aux[S.A_MID_UP] if upper else aux[S.A_MID_LOW])
 
-    def _midspan_many(self, aux, forward, tight, tight_length) -> np.ndarray:
-        return np.where(forward, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
+    def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
+        return np.where(upper, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
 
     def check_states(self, times, states) -> None:
         """:meth:`check` for many states (vectorised): raises for the first that fails."""

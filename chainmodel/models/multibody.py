@@ -354,10 +354,10 @@ class MultibodyModel(Model):
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
         d["tight_span.tension"] = ("axial force of the tight-span link whose midpoint is nearest "
-                                   "the middle of the span's line (upper span when driving "
-                                   "forward)")
+                                   "the middle of the span's line (the span whose middle link "
+                                   "carries the larger force)")
         d["slack_span.tension"] = ("axial force of the slack-span link whose midpoint is nearest "
-                                   "the middle of the span's line")
+                                   "the middle of the span's line (the other span)")
         d["tight_span.length"] = ("distance between the tight span's endpoint rollers (the last "
                                   "roller engaged on the sprocket it leaves, the first on the one "
                                   "it runs onto)")
@@ -420,8 +420,10 @@ class MultibodyModel(Model):
         phi2, w2 = x[1], x[n + 1]
         reverse = u.speed < 0
         tension = self.ws.tension
-        tight, slack = (low, up) if reverse else (up, low)
-        centre_from = self._centres[0] if reverse else self._centres[1]
+        # the tight span carries the larger tension (ties: the one the driver winds on)
+        lower = tension[low[0]] > tension[up[0]] or (tension[low[0]] == tension[up[0]] and reverse)
+        tight, slack = (low, up) if lower else (up, low)
+        centre_from = self._centres[0] if lower else self._centres[1]
         _, a, b = tight
         A, B = z[a], z[b]
         nl = (b - a) % self.M
@@ -465,7 +467,8 @@ class MultibodyModel(Model):
         acc, shaft, z, up, low = self._evaluate(t, x, u)
         d = self.drive
         engaged = self._engaged(x)
-        tight = low if u.speed < 0 else up
+        t = self.ws.tension
+        tight = low if (t[low[0]] > t[up[0]] or (t[low[0]] == t[up[0]] and u.speed < 0)) else up
         seats = []
         for s, (teeth, R, cen) in enumerate(((d.n_driver, d.driver.pitch_radius, self._centres[0]),
                                              (d.n_driven, d.driven.pitch_radius, self._centres[1]))):

@@ -493,14 +493,18 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     rigid = P[I_RIGID] != 0.0
     phi1 = tau if rigid else q[0]
     w1 = tau_d if rigid else v[0]
-    t_span = 1 if reverse else 0
+    # the tight span carries the larger tension (ties: the one the driver winds on; under an
+    # overrunning load it is the one the driven sprocket pulls)
+    t_up = tension[spans[0, 0]]
+    t_low = tension[spans[1, 0]]
+    t_span = 1 if (t_low > t_up or (t_low == t_up and reverse)) else 0
     s_span = 1 - t_span
     a = spans[t_span, 1]
     b = spans[t_span, 2]
     ax = q[2 + 2 * a]
     ay = q[3 + 2 * a]
-    cx = ax - (P[I_CX] if reverse else 0.0)
-    cy = ay - (P[I_CY] if reverse else 0.0)
+    cx = ax - (P[I_CX] if t_span == 1 else 0.0)
+    cy = ay - (P[I_CY] if t_span == 1 else 0.0)
     chx = q[2 + 2 * b] - ax
     chy = q[3 + 2 * b] - ay
     length = math.sqrt(chx * chx + chy * chy)

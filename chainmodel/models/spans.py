@@ -347,8 +347,10 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
             else:
                 fu -= 2.0 * speed / lbu * (y2u - y1u) * gk
                 fl -= 2.0 * speed / lbl * (y2l - y1l) * gk
-            wu2 = (t_u - rho * speed * speed) / rho * (kpi / lbu) ** 2
-            wl2 = (t_l - rho * speed * speed) / rho * (kpi / lbl) ** 2
+            # seed 004 eq 58's (T - rho A S^2) with the span's material tension T = t + rho A S^2
+            # (t the elastic tension, plus the centrifugal tension; docs/stability.md): t
+            wu2 = t_u / rho * (kpi / lbu) ** 2
+            wl2 = t_l / rho * (kpi / lbl) ** 2
             dx[base + 2 * n + k - 1] = (fu - wu2 * qu - 2.0 * P[P_ZETA] * k * P[P_W1_U]
                                         * dx[base + k - 1])
             dx[base + 3 * n + k - 1] = (fl - wl2 * ql - 2.0 * P[P_ZETA] * k * P[P_W1_L]

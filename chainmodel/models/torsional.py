@@ -18,7 +18,8 @@ release. Its tension comes from its stretch::
 
 with p_free = p - pretension / k_link the free link length and k_eff = k_link / n (links in
 series; with ``torsional.seat_compliance`` the seats' ladder compliance is added in series). A span
-cannot push: at zero stretch or zero tension it goes slack, and that switch is an event of the
+cannot push: at zero stretch or zero tension it goes slack (the outputs add the centrifugal
+tension rho A v^2 on top, docs/stability.md), and that switch is an event of the
 steppers (:meth:`TorsionalModel.switching_functions`), as are the seating and release events at
 all four span ends. At zero stretch the spans lie exactly where level 0 puts them, so polygonal
 action and the varying wrapping length excite the drive by themselves.
@@ -43,9 +44,10 @@ import numpy as np
 from ..geometry import Drive
 from ..kinematics import driven_rotation
 from ..kinematics.wrapping import chain_geometry, tooth_period_samples
+from . import limits
 from . import spans as S
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
-                   quasi_static_extras)
+                   centrifugal_tension, quasi_static_extras)
 from .kinematic import seat_series_compliance, seat_stiffness, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
@@ -64,6 +66,8 @@ class TorsionalModel(Model):
     preferred_method: ClassVar[str] = "rk4"
     second_order: ClassVar[bool] = True
     n_modes: int = 0
+    #: names of switching_functions' entries (for messages)
+    switching_names: ClassVar[tuple[str, ...]] = SWITCH_NAMES
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
         super().__init__(drive, params)
@@ -127,7 +131,7 @@ class TorsionalModel(Model):
         """(extra compliance per span [m/N], extra free length per span [m]) from the seats
         (option ``torsional.seat_compliance``; :func:`~chainmodel.models.kinematic.
         seat_series_compliance`)."""
-        return seat_series_compliance(self.params)
+        return seat_series_compliance(self.params, self.drive)
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -222,8 +226,15 @@ class TorsionalModel(Model):
                 lo, hi = lo - a_o, hi + a_o
                 flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
             else:
-                raise ValueError("no static equilibrium of the driven sprocket under "
-                                 f"load.torque = {u.torque:g} N.m")
+                p = self.params
+                raise ValueError(
+                    f"no static equilibrium of the driven sprocket within 20 teeth of the "
+                    f"kinematic position under load.torque = {u.torque:g} N.m: the spans "
+                    f"(chain.link_stiffness = {p['chain.link_stiffness']:g} N/m per link, "
+                    f"static tension {self.static_tension():.4g} N) cannot carry "
+                    f"{abs(u.torque) / d.driven.pitch_radius:.4g} N of tension difference "
+                    "without stretching by more than that; use a stiffer chain or a smaller "
+                    "load")
             if flo == 0.0:
                 return lo
             if fhi == 0.0:
@@ -314,6 +325,28 @@ class TorsionalModel(Model):
                                                                                   self.params)
         return cached
 
+    def axial_frequency(self) -> float:
+        """Lowest axial natural frequency [Hz] of the longer span (its largest link count over a
+        tooth period; the seats' series compliance at its ends): the mode levels 1-2 treat as
+        quasi-static (:func:`~chainmodel.models.limits.span_axial_frequency`)."""
+        r = self.reference
+        n = math.ceil(max(r["n_up"], r["n_low"]) - 1e-9)
+        return limits.span_axial_frequency(n, self.params, self.series_compliance()[0])
+
+    def speed_limit(self) -> tuple[float, str]:
+        """Levels 1-2 take the spans' axial motion as quasi-static (seed 004 section 5.3,
+        N_,x = 0; the span mass lumped on the sprockets): valid while the meshing frequency is
+        below limits.QUASI_STATIC_RATIO of the spans' first axial frequency (and below the
+        centrifugal strain bound of every level)."""
+        w_c, why_c = super().speed_limit()
+        f_ax = self.axial_frequency()
+        w = limits.speed_for_meshing(self.drive, limits.QUASI_STATIC_RATIO * f_ax)
+        if w_c < w:
+            return w_c, why_c
+        return w, (f"the meshing frequency would exceed {limits.QUASI_STATIC_RATIO:g} x the "
+                   f"spans' first axial natural frequency ({f_ax:.4g} Hz), which this level "
+                   "treats as quasi-static; use fidelity 3 (multibody) or a lower speed")
+
     def stiffness_bound(self) -> np.ndarray:
         """Linear stiffness matrix of the sprocket rotations with both spans taut, their
         shortest link counts and arms equal to the pitch radii (an upper bound for stable_step)."""
@@ -364,7 +397,7 @@ class TorsionalModel(Model):
         d["contact.max_force"] = QUASI_STATIC + "the tight-span tension (the seats are not modelled)"
         return d
 
-    def _midspan(self, aux, forward: bool, tight: float, tight_length: float) -> float:
+    def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
         """Scalar form of :func:`~chainmodel.models.base.quasi_static_extras`' sag (the numpy
         version costs more than a whole compiled communication step)."""
         p = self.params
@@ -377,11 +410,13 @@ class TorsionalModel(Model):
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
         x = np.asarray(x, float)
         dx, aux = self._eval(t, x, u)
-        forward = u.speed >= 0.0
         t_up, t_low = float(aux[S.A_T_UP]), float(aux[S.A_T_LOW])
-        tight, slack = (t_up, t_low) if forward else (t_low, t_up)
-        length = float(aux[S.A_L_UP] if forward else aux[S.A_L_LOW])
+        # the tight span carries the larger tension (ties: the one the driver winds on)
+        upper = t_up > t_low or (t_up == t_low and u.speed >= 0.0)
+        tight, slack = (t_up, t_low) if upper else (t_low, t_up)
+        length = float(aux[S.A_L_UP] if upper else aux[S.A_L_LOW])
         phi1, w1 = float(aux[S.A_PHI1]), float(aux[S.A_W1])
+        centrifugal = float(centrifugal_tension(self.drive, self.params, w1))
         if self.rigid:
             phi2, w2 = float(x[0]), float(x[1])
         else:
@@ -390,17 +425,19 @@ class TorsionalModel(Model):
         out = {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
                "driven.speed": w2, "driven.acceleration": float(aux[S.A_ACC2]),
                "input_shaft.torque": float(aux[S.A_TAU_IN]),
-               "tight_span.tension": tight, "slack_span.tension": slack,
+               "tight_span.tension": tight + centrifugal,
+               "slack_span.tension": slack + centrifugal,
                "tight_span.length": length,
                # at rest the instantaneous ratio is undefined; report the mean (tooth) ratio
                "velocity_ratio": w2 / w1 if abs(w1) > 1e-9 else ratio,
                "transmission_error": phi2 - ratio * phi1}
-        out["tight_span.midspan_deflection"] = self._midspan(aux, forward, tight, length)
-        out["chain.max_link_tension"] = max(tight, slack)
+        # sag and seat force from the effective tension (quasi_static_extras)
+        out["tight_span.midspan_deflection"] = self._midspan(aux, upper, tight, length)
+        out["chain.max_link_tension"] = max(tight, slack) + centrifugal
         out["contact.max_force"] = tight
         return out
 
-    def _midspan_many(self, aux, forward, tight, tight_length) -> np.ndarray:
+    def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
         """:meth:`_midspan` for arrays of samples."""
         p = self.params
         rho = p["chain.link_mass"] / self.drive.pitch
@@ -419,12 +456,13 @@ class TorsionalModel(Model):
         S.evaluate_many(states, np.ascontiguousarray(angle, float), speed,
                         np.ascontiguousarray(acceleration, float),
                         np.ascontiguousarray(torque, float), self.G, self.P, aux)
-        forward = speed >= 0.0
         t_up, t_low = aux[:, S.A_T_UP], aux[:, S.A_T_LOW]
-        tight = np.where(forward, t_up, t_low)
-        slack = np.where(forward, t_low, t_up)
-        length = np.where(forward, aux[:, S.A_L_UP], aux[:, S.A_L_LOW])
+        upper = (t_up > t_low) | ((t_up == t_low) & (speed >= 0.0))
+        tight = np.where(upper, t_up, t_low)
+        slack = np.where(upper, t_low, t_up)
+        length = np.where(upper, aux[:, S.A_L_UP], aux[:, S.A_L_LOW])
         phi1, w1 = aux[:, S.A_PHI1].copy(), aux[:, S.A_W1].copy()
+        centrifugal = centrifugal_tension(self.drive, self.params, w1)
         if self.rigid:
             phi2, w2 = states[:, 0].copy(), states[:, 1].copy()
         else:
@@ -435,11 +473,12 @@ class TorsionalModel(Model):
         return {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
                 "driven.speed": w2, "driven.acceleration": aux[:, S.A_ACC2].copy(),
                 "input_shaft.torque": aux[:, S.A_TAU_IN].copy(),
-                "tight_span.tension": tight, "slack_span.tension": slack,
+                "tight_span.tension": tight + centrifugal,
+                "slack_span.tension": slack + centrifugal,
                 "tight_span.length": length, "velocity_ratio": velocity_ratio,
                 "transmission_error": phi2 - ratio * phi1,
-                "tight_span.midspan_deflection": self._midspan_many(aux, forward, tight, length),
-                "chain.max_link_tension": np.maximum(tight, slack),
+                "tight_span.midspan_deflection": self._midspan_many(aux, upper, tight, length),
+                "chain.max_link_tension": np.maximum(tight, slack) + centrifugal,
                 "contact.max_force": tight.copy()}
 
     def evaluate_states(self, times, states, inputs) -> dict[str, np.ndarray]:
