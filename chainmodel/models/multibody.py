@@ -58,6 +58,12 @@ REST_SPEED = 1e-3
 #: communication steps are split into chunks of at most this many fixed steps for the compiled
 #: loop (the inputs are interpolated by a cubic Hermite within a chunk)
 CHUNK_STEPS = 64
+#: stretch [m] over which a link's damper engages (Hunt-Crossley: the damping force grows with
+#: the contact, so it does not jump when a slack link snaps taut); 1 um is 51 N on xu2010's links
+DAMPING_ONSET = 1e-6
+#: damping ratio c / sqrt(k m) of the links' zig-zag mode (2 sqrt(k / m)) below which the links
+#: count as undamped for the automatic step (seed 003's 100 N.s/m gives 0.11)
+UNDAMPED_LINKS = 0.02
 
 
 def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[float, float, float]:
@@ -122,7 +128,8 @@ class MultibodyModel(Model):
             paper_damping=float(p["multibody.paper_damping"]),
             q_forces=float(p["multibody.rotating_frame_forces"]),
             rigid_shaft=float(p["input_shaft.rigid"]), l_min=0.5 * pitch, l_max=1.5 * pitch,
-            z1=drive.n_driver, z2=drive.n_driven, cj=p["chain.joint_damping"])
+            z1=drive.n_driver, z2=drive.n_driven, cj=p["chain.joint_damping"],
+            gap=p["chain.joint_clearance"], onset=DAMPING_ONSET)
         # rollers farther than this from a sprocket centre cannot touch its teeth (the flank
         # ends at tip; sl <= tip needs |r| cos(pi / z) <= R + tip); 0.1 p keeps the engaged
         # test of the outputs inside it
@@ -297,7 +304,16 @@ class MultibodyModel(Model):
         return max(math.sqrt(w2), damping_rate)
 
     def stable_step(self, x: np.ndarray) -> float:
-        return 1.0 / self.omega_max(x)
+        """1 / omega_max; an eighth of it when the links' zig-zag mode is damped less than
+        UNDAMPED_LINKS of critical: a slack link snapping taut is then an undamped impact on the
+        link spring, and velocity Verlet near its stability limit (h omega = 1.8, under two
+        steps per impact) gains energy at such impacts until the run diverges (measured in
+        docs/multibody.md "Energy without dissipation"); at h omega = 0.225 the energy error
+        stays at the scheme's O(h^2)."""
+        w = self.omega_max(x)
+        p = self.params
+        zeta = p["chain.link_damping"] / math.sqrt(p["chain.link_stiffness"] * p["chain.link_mass"])
+        return (1.0 if zeta >= UNDAMPED_LINKS else 0.125) / w
 
     def jacobian_sparsity(self):
         """d(rhs)/dx pattern: dq/dt = v; a roller's acceleration depends on the positions and
@@ -493,7 +509,8 @@ class MultibodyModel(Model):
             + 0.5 * p["driven.inertia"] * v[1] ** 2
         z = q[2:].reshape(self.M, 2)
         L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
-        links = 0.5 * p["chain.link_stiffness"] * float(np.sum((L - self.P[K.I_L0]) ** 2))
+        links = float(np.sum(K.link_potential(L - self.P[K.I_L0], p["chain.link_stiffness"],
+                                              self.P[K.I_GAP])))
         self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
         pen = np.where(self.ws.side > 0, self.ws.fcon / p["contact.stiffness"], 0.0)
         contact = 0.5 * p["contact.stiffness"] * float(pen @ pen)
