@@ -225,9 +225,15 @@ class MultibodyModel(Model):
         return out
 
     def check(self, t: float, x: np.ndarray) -> None:
+        """SimulationDiverged when a link leaves [0.5, 1.5] pitches or the state is not finite,
+        with the cause: a chain too soft for its tension (most links stretched by a tenth of a
+        pitch or more: the stiffness, not the step, is at fault) or a diverging integration."""
         if x is self._verified:
             return
-        super().check(t, x)
+        if not np.all(np.isfinite(x)):
+            raise SimulationDiverged(
+                f"multibody model diverged at t = {t:.6g} s (non-finite state); try a smaller "
+                "solver.step")
         n = 2 + 2 * self.M
         z = x[2:n].reshape(self.M, 2)
         dz = np.diff(z, axis=0, append=z[:1])
@@ -235,11 +241,23 @@ class MultibodyModel(Model):
         if L2.max() <= 2.25 and L2.min() >= 0.25:
             return
         L = np.sqrt(L2)
-        if np.any(L > 1.5) or np.any(L < 0.5):
-            i = int(np.argmax(np.abs(L - 1.0)))
+        i = int(np.argmax(np.abs(L - 1.0)))
+        k = self.params["chain.link_stiffness"]
+        p = self.drive.pitch
+        stretch = L * p - self.P[K.I_L0]
+        taut = stretch > 0
+        if np.count_nonzero(stretch > 0.1 * p) >= max(3, self.M // 4):
+            tension = float(np.percentile(k * stretch[taut], 90))
             raise SimulationDiverged(
-                f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
-                "pitches; try a smaller solver.step or solver.method = radau")
+                f"multibody model stopped at t = {t:.6g} s: the chain is too soft for its "
+                f"tension - chain.link_stiffness = {k:g} N/m stretches {np.count_nonzero(stretch > 0.1 * p)} "
+                f"of {self.M} links by more than a tenth of a pitch (90th-percentile link tension "
+                f"{tension:.4g} N) and link {i} to {L[i]:.3g} pitches; level 3 needs links "
+                f"stretched by a few percent at most: raise chain.link_stiffness (at least "
+                f"{20 * tension / p:.3g} N/m keeps this tension within 5 % of the pitch)")
+        raise SimulationDiverged(
+            f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
+            "pitches while the rest of the chain is not stretched; try a smaller solver.step")
 
     def advance_compiled(self, method, t0, t1, x, h, source):
         """The fixed-step loop of :mod:`chainmodel.integrate` (``verlet`` exactly as
@@ -320,6 +338,22 @@ class MultibodyModel(Model):
         zeta = p["chain.link_damping"] / math.sqrt(p["chain.link_stiffness"] * p["chain.link_mass"])
         return math.inf if zeta >= UNDAMPED_LINKS else IMPACT_STEP / self.omega_max()
 
+    def refuse_method(self, method: str) -> str | None:
+        """Why ``method`` is refused at this level (None: accepted). The implicit steppers are:
+        the model is stiff (link zig-zag mode ~18 kHz) *and* non-smooth (seat contacts open and
+        close, links go slack, hundreds of times per tooth period), so Newton iterations fail
+        at the kinks and the step collapses below the explicit stable step; the sprocket rows
+        of the Jacobian are full (any roller may touch a seat), so scipy's finite differences
+        cost a column per state. Measured on xu2010 (0.01 s, docs/multibody.md "Steppers"):
+        radau 22 s, bdf 8 s CPU against about 1 s for verlet and rk45, same answer."""
+        if method in ("radau", "bdf", "lsoda"):
+            return (f"solver.method = {method} is refused at level 3 (multibody): the model is "
+                    "stiff and non-smooth (contacts and slack links switch hundreds of times per "
+                    "tooth period), so implicit steppers take minutes where verlet takes seconds "
+                    "(xu2010, 0.01 s: radau 22 s, bdf 8 s, verlet 1 s CPU); use solver.method = "
+                    "verlet (the default, auto) or rk4")
+        return None
+
     def jacobian_sparsity(self):
         """d(rhs)/dx pattern: dq/dt = v; a roller's acceleration depends on the positions and
         velocities of the rollers up to two links away (links; joint dampers span two links) and
@@ -394,6 +428,9 @@ class MultibodyModel(Model):
             "rollers, positive away from the line of centres")
         d["chain.max_link_tension"] = "largest axial link force in the chain"
         d["contact.max_force"] = "largest roller-seat normal contact force"
+        d["chain.min_link_tension"] = ("smallest axial link force in the chain: 0 while a link is "
+                                       "slack (inside its pin-bushing play), negative only while "
+                                       "its plates bear in compression")
         return d
 
     def _engaged(self, x):
@@ -476,6 +513,7 @@ class MultibodyModel(Model):
             "tight_span.midspan_deflection": deflection,
             "chain.max_link_tension": float(np.max(tension)),
             "contact.max_force": float(np.max(self.ws.fcon)),
+            "chain.min_link_tension": float(np.min(tension)),
         }
 
     def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:

@@ -498,7 +498,8 @@ def spans_numpy(q, dist, side, seat_angle, tol, P, mids, out):
 OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
                 "driven.acceleration", "input_shaft.torque", "tight_span.tension",
                 "slack_span.tension", "tight_span.length", "velocity_ratio", "transmission_error",
-                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force")
+                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force",
+                "chain.min_link_tension")
 
 
 def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
@@ -543,10 +544,13 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
             ny = -ny
         deflection = nx * (mx - ax) + ny * (my - ay)
     tmax = tension[0]
+    tmin = tension[0]
     fmax = fcon[0]
     for i in range(M):
         if tension[i] > tmax:
             tmax = tension[i]
+        if tension[i] < tmin:
+            tmin = tension[i]
         if fcon[i] > fmax:
             fmax = fcon[i]
     out[0] = phi1
@@ -563,6 +567,7 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     out[11] = deflection
     out[12] = tmax
     out[13] = fmax
+    out[14] = tmin
     return status
 
 
