@@ -12,10 +12,14 @@ origin, driver C at (x_c, y_c)), sprocket rotations phi1, phi2 forward positive 
     I2 phi2'' = sum_i Q_contact(i, 2) - M_load - d2 phi2'                          (eq 15)
 
 * Link i joins roller i and i+1 (mod M): axial force T = k (|d| - l0) + c e.(v_{i+1} - v_i)
-  along e = d/|d| (U of eq A2; the dissipation is axial, see below). l0 = p - pretension / k.
+  along e = d/|d| while taut (U of eq A2; the dissipation is axial, see below), l0 = p -
+  pretension / k; no force while the link is shortened within the pin-bushing play
+  ``chain.joint_clearance``, k (|d| - l0 + play) once the plates bear; a damper never pushes a
+  taut link (docs/multibody.md "Links carry no compression"; departs from eq A2's spring, which
+  pushes).
   Joint dampers (not in seed 003) resist the relative rotation of neighbouring links,
   S_j = c_j/2 sum (w_i - w_{i-1})^2: they damp the spans' transverse vibration, not the rigid
-  rotation of wrapped links.
+  rotation of wrapped links (default 0.002 N.m.s/rad so that the outputs converge in the step).
 * Contact (eqs 5-10): each roller is checked against the seat of each sprocket nearest to it by
   angle about that sprocket's centre, from the sprocket's current rotation (so the assignment
   holds for ever, whatever M and z). The seat is the paper's circle of radius R_t about the seat
