@@ -402,8 +402,12 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
                 f"{s['steady_from_s']:g} s"),
         ("operating point", f"{s['input_speed_rpm']:.5g} rpm input, load {s['load_torque_nm']:.5g} N.m"),
         ("static tension", f"{_g(s['static_span_tension_n'])} N"),
-        ("tight span", f"mean {_g(s['mean_tight_tension_n'])} N, peak {_g(s['peak_tight_tension_n'])} N"),
-        ("slack span", f"mean {_g(s['mean_slack_tension_n'])} N, peak {_g(s['peak_slack_tension_n'])} N"),
+        ("tight span", f"mean {_g(s['mean_tight_tension_n'])} N, peak {_g(s['peak_tight_tension_n'])} N, "
+                       f"min {_g(s['min_tight_tension_n'])} N"),
+        ("slack span", f"mean {_g(s['mean_slack_tension_n'])} N, peak {_g(s['peak_slack_tension_n'])} N, "
+                       f"min {_g(s['min_slack_tension_n'])} N"),
+        ("weakest link", f"min {_g(s['min_link_tension_n'])} N; a link slack "
+                         f"{100 * s['slack_link_time_fraction']:.3g} % of the time"),
         ("input torque", f"mean {_g(s['mean_input_torque_nm'])} N.m"),
         ("tooth ratio", f"{_g(ratio, 10)}  (exact {drive.n_driver}/{drive.n_driven} = "
                         f"{exact:.10g}{err})"),

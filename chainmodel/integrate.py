@@ -553,6 +553,10 @@ def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: In
     step of the fixed-step methods (an explicit ``step`` is kept as given)."""
     if method == "auto":
         method = getattr(model, "preferred_method", "rk45")
+    refuse = getattr(model, "refuse_method", None)
+    reason = refuse(method) if refuse is not None else None
+    if reason:
+        raise ValueError(reason)
     if method == "rk4":
         return RK4(model, t0, x0, inputs, step=step, max_step=max_step)
     if method == "verlet":

@@ -114,6 +114,7 @@ def _p(*args, **kw) -> Parameter:
 # ISO 606 10B roller (the xu2010 chain, p = 15.875 mm): d1 = 10.16 mm.
 _ROLLER_RADIUS = 10.16e-3 / 2
 _SEAT_RADIUS = 0.505 * 10.16e-3  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
+_JOINT_CLEARANCE = 5.13e-3 - 5.08e-3  # ISO 606 10B: bush bore d3 min - pin body d2 max
 
 PARAMETERS: tuple[Parameter, ...] = (
     _p("fidelity", 1, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody "
@@ -139,11 +140,18 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("chain.link_stiffness", 5.1e7, "N/m", "longitudinal stiffness of one link (seed 003)",
        minimum=0.0, exclusive_minimum=True),
     _p("chain.link_damping", 100.0, "N.s/m", "damping of one link (seed 003)", minimum=0.0),
-    _p("chain.joint_damping", 0.0, "N.m.s/rad",
+    _p("chain.joint_damping", 0.002, "N.m.s/rad",
        "viscous damping of the relative rotation of neighbouring links at a joint (not in seed "
-       "003, hence 0; 0.02 gives xu2010's tight-span first transverse mode about 2 % damping; "
-       "frame-indifferent, so wrapped links turning with a sprocket do not dissipate)",
+       "003; stands in for joint friction: c_j times the sprocket speed equals the friction "
+       "torque mu T r_pin of a slack-side joint of xu2010 at 120 rpm, mu = 0.1; damps the "
+       "spans' transverse modes so that level 3 converges, docs/multibody.md \"Convergence\"); "
+       "frame-indifferent, so wrapped links turning with a sprocket do not dissipate",
        minimum=0.0, levels=(3,)),
+    _p("chain.joint_clearance", _JOINT_CLEARANCE, "m",
+       "pin-bushing diametral clearance: a link shortens by this much without force before its "
+       "plates bear in compression (ISO 606 10B: bush bore d3 min 5.13 mm - pin d2 max "
+       "5.08 mm); links carry no compression across it", minimum=0.0, display_unit="mm",
+       levels=(3,)),
     _p("chain.pretension", 0.0, "N",
        "pre-strain of every link, at every level: its free length is "
        "p - pretension / link_stiffness (the tension of a link held at the pitch); refused on a "

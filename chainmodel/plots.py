@@ -224,6 +224,10 @@ def plot_run(result, path: str | Path, summary: Mapping[str, Any] | None = None)
     ax = fig.add_subplot(grid[0, 0])
     ax.plot(t, result["tight_span.tension"], lw=0.9, label="tight span")
     ax.plot(t, result["slack_span.tension"], lw=0.9, label="slack span")
+    low = np.asarray(result["chain.min_link_tension"], float)
+    ax.plot(t, low, lw=0.6, color="C3", alpha=0.8,
+            label=f"weakest link (slack {100 * float(np.mean(low[mask] <= 0)):.2g} % of steady time)")
+    ax.axhline(0.0, color="k", lw=0.5)
     if math.isfinite(result.static_tension):
         ax.axhline(result.static_tension, color="0.5", ls=":", lw=0.8, label="static tension")
     ax.set_xlabel("time [s]")

@@ -200,6 +200,8 @@ def test_presets_json_lists_every_preset(capsys):
 # --- run --------------------------------------------------------------------------------------
 
 RUN_KEYS = {"scene", "fidelity", "mean_tight_tension_n", "peak_tight_tension_n",
+            "min_tight_tension_n", "min_slack_tension_n", "min_link_tension_n",
+            "slack_link_time_fraction",
             "mean_slack_tension_n", "peak_slack_tension_n", "tooth_ratio",
             "dominant_frequency_hz", "meshing_frequency_hz", "mean_input_torque_nm",
             "wall_time_s", "real_time_factor", "static_span_tension_n", "notes", "drive"}

@@ -1,4 +1,4 @@
-"""A pythonfmu co-simulation FMU that does nothing: the same three Real inputs and fourteen Real
+"""A pythonfmu co-simulation FMU that does nothing: the same three Real inputs and fifteen Real
 outputs as ChainDrive.fmu, no parameters, ``do_step`` returns at once. Its cost per communication
 step through fmpy is the floor that any pythonfmu FMU pays (ctypes, the C++ wrapper, the GIL,
 pythonfmu's Python-side get/set); benchmarks/fmu_cost.py measures ChainDrive next to it."""
@@ -9,7 +9,7 @@ INPUTS = ("input_shaft.angle", "input_shaft.speed", "load.torque")
 OUTPUTS = ("driver.angle", "driver.speed", "driven.angle", "driven.speed", "driven.acceleration",
            "input_shaft.torque", "tight_span.tension", "slack_span.tension", "tight_span.length",
            "velocity_ratio", "transmission_error", "tight_span.midspan_deflection",
-           "chain.max_link_tension", "contact.max_force")
+           "chain.max_link_tension", "contact.max_force", "chain.min_link_tension")
 
 
 class BareFmu(Fmi2Slave):

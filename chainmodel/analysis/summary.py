@@ -100,6 +100,11 @@ def summarise(result) -> dict:
         "peak_tight_tension_n": float(np.max(tight)),
         "mean_slack_tension_n": float(np.mean(slack)),
         "peak_slack_tension_n": float(np.max(slack)),
+        "min_tight_tension_n": float(np.min(tight)),
+        "min_slack_tension_n": float(np.min(slack)),
+        # a slack link (level 3) or span (levels 0-2) shows as a zero minimum link tension
+        "min_link_tension_n": float(np.min(result["chain.min_link_tension"][mask])),
+        "slack_link_time_fraction": float(np.mean(result["chain.min_link_tension"][mask] <= 0.0)),
         "mean_input_torque_nm": float(np.mean(result["input_shaft.torque"][mask])),
         "tooth_ratio": tooth_ratio(phi1, phi2, drive.n_driver),
         "exact_tooth_ratio": drive.n_driver / drive.n_driven,

@@ -88,6 +88,9 @@ EXTRA_OUTPUTS: tuple[OutputSpec, ...] = (
                "between its endpoints (positive away from the line of centres)"),
     OutputSpec("chain.max_link_tension", "N", "largest link tension in the chain"),
     OutputSpec("contact.max_force", "N", "largest roller-tooth contact force"),
+    OutputSpec("chain.min_link_tension", "N",
+               "smallest link tension in the chain (0: a link is slack; negative: its plates "
+               "bear in compression)"),
 )
 
 ALL_OUTPUTS: tuple[OutputSpec, ...] = CORE_OUTPUTS + EXTRA_OUTPUTS
@@ -106,7 +109,8 @@ def quasi_static_extras(drive: Drive, params: Mapping[str, Any], tight, slack,
       g cos(inclination) (m/p) l^2 / (8 T), reported negative (towards gravity); a span without
       tension reports the geometric bound l / 2. A moving string sags under the effective
       tension (T - rho A v^2 of the moving-string equation);
-    * largest link tension: the larger span tension, centrifugal tension included;
+    * largest / smallest link tension: the larger / smaller span tension, centrifugal tension
+      included;
     * largest contact force: with rigid seats the first seated roller on the driver takes at
       most the tight-span tension (the effective one: the centrifugal part is balanced by the
       wrapped chain's centripetal acceleration, not by the seats), which is what we report.
@@ -120,7 +124,8 @@ def quasi_static_extras(drive: Drive, params: Mapping[str, Any], tight, slack,
                    tight_length / 2)
     return {"tight_span.midspan_deflection": -sag,
             "chain.max_link_tension": np.maximum(tight, slack) + centrifugal,
-            "contact.max_force": tight.copy()}
+            "contact.max_force": tight.copy(),
+            "chain.min_link_tension": np.minimum(tight, slack) + centrifugal}
 
 
 def centrifugal_tension(drive: Drive, params: Mapping[str, Any], driver_speed):

@@ -265,6 +265,7 @@ class KinematicModel(Model):
         d["tight_span.midspan_deflection"] = (QUASI_STATIC + "static sag of the tight span under "
                                               "gravity at its tension")
         d["chain.max_link_tension"] = QUASI_STATIC + "the larger span tension"
+        d["chain.min_link_tension"] = QUASI_STATIC + "the smaller span tension"
         d["contact.max_force"] = QUASI_STATIC + "the tight-span tension (rigid seats)"
         return d
 

@@ -12,10 +12,14 @@ origin, driver C at (x_c, y_c)), sprocket rotations phi1, phi2 forward positive 
     I2 phi2'' = sum_i Q_contact(i, 2) - M_load - d2 phi2'                          (eq 15)
 
 * Link i joins roller i and i+1 (mod M): axial force T = k (|d| - l0) + c e.(v_{i+1} - v_i)
-  along e = d/|d| (U of eq A2; the dissipation is axial, see below). l0 = p - pretension / k.
+  along e = d/|d| while taut (U of eq A2; the dissipation is axial, see below), l0 = p -
+  pretension / k; no force while the link is shortened within the pin-bushing play
+  ``chain.joint_clearance``, k (|d| - l0 + play) once the plates bear; a damper never pushes a
+  taut link (docs/multibody.md "Links carry no compression"; departs from eq A2's spring, which
+  pushes).
   Joint dampers (not in seed 003) resist the relative rotation of neighbouring links,
   S_j = c_j/2 sum (w_i - w_{i-1})^2: they damp the spans' transverse vibration, not the rigid
-  rotation of wrapped links.
+  rotation of wrapped links (default 0.002 N.m.s/rad so that the outputs converge in the step).
 * Contact (eqs 5-10): each roller is checked against the seat of each sprocket nearest to it by
   angle about that sprocket's centre, from the sprocket's current rotation (so the assignment
   holds for ever, whatever M and z). The seat is the paper's circle of radius R_t about the seat
@@ -58,6 +62,14 @@ REST_SPEED = 1e-3
 #: communication steps are split into chunks of at most this many fixed steps for the compiled
 #: loop (the inputs are interpolated by a cubic Hermite within a chunk)
 CHUNK_STEPS = 64
+#: stretch [m] over which a link's damper engages (Hunt-Crossley: the damping force grows with
+#: the contact, so it does not jump when a slack link snaps taut); 1 um is 51 N on xu2010's links
+DAMPING_ONSET = 1e-6
+#: h omega_max of the automatic step when the links are undamped (see event_step)
+IMPACT_STEP = 0.225
+#: damping ratio c / sqrt(k m) of the links' zig-zag mode (2 sqrt(k / m)) below which the links
+#: count as undamped for the automatic step (seed 003's 100 N.s/m gives 0.11)
+UNDAMPED_LINKS = 0.02
 
 
 def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[float, float, float]:
@@ -122,7 +134,8 @@ class MultibodyModel(Model):
             paper_damping=float(p["multibody.paper_damping"]),
             q_forces=float(p["multibody.rotating_frame_forces"]),
             rigid_shaft=float(p["input_shaft.rigid"]), l_min=0.5 * pitch, l_max=1.5 * pitch,
-            z1=drive.n_driver, z2=drive.n_driven, cj=p["chain.joint_damping"])
+            z1=drive.n_driver, z2=drive.n_driven, cj=p["chain.joint_damping"],
+            gap=p["chain.joint_clearance"], onset=DAMPING_ONSET)
         # rollers farther than this from a sprocket centre cannot touch its teeth (the flank
         # ends at tip; sl <= tip needs |r| cos(pi / z) <= R + tip); 0.1 p keeps the engaged
         # test of the outputs inside it
@@ -216,9 +229,15 @@ class MultibodyModel(Model):
         return out
 
     def check(self, t: float, x: np.ndarray) -> None:
+        """SimulationDiverged when a link leaves [0.5, 1.5] pitches or the state is not finite,
+        with the cause: a chain too soft for its tension (most links stretched by a tenth of a
+        pitch or more: the stiffness, not the step, is at fault) or a diverging integration."""
         if x is self._verified:
             return
-        super().check(t, x)
+        if not np.all(np.isfinite(x)):
+            raise SimulationDiverged(
+                f"multibody model diverged at t = {t:.6g} s (non-finite state); try a smaller "
+                "solver.step")
         n = 2 + 2 * self.M
         z = x[2:n].reshape(self.M, 2)
         dz = np.diff(z, axis=0, append=z[:1])
@@ -226,11 +245,23 @@ class MultibodyModel(Model):
         if L2.max() <= 2.25 and L2.min() >= 0.25:
             return
         L = np.sqrt(L2)
-        if np.any(L > 1.5) or np.any(L < 0.5):
-            i = int(np.argmax(np.abs(L - 1.0)))
+        i = int(np.argmax(np.abs(L - 1.0)))
+        k = self.params["chain.link_stiffness"]
+        p = self.drive.pitch
+        stretch = L * p - self.P[K.I_L0]
+        taut = stretch > 0
+        if np.count_nonzero(stretch > 0.1 * p) >= max(3, self.M // 4):
+            tension = float(np.percentile(k * stretch[taut], 90))
             raise SimulationDiverged(
-                f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
-                "pitches; try a smaller solver.step or solver.method = radau")
+                f"multibody model stopped at t = {t:.6g} s: the chain is too soft for its "
+                f"tension - chain.link_stiffness = {k:g} N/m stretches {np.count_nonzero(stretch > 0.1 * p)} "
+                f"of {self.M} links by more than a tenth of a pitch (90th-percentile link tension "
+                f"{tension:.4g} N) and link {i} to {L[i]:.3g} pitches; level 3 needs links "
+                f"stretched by a few percent at most: raise chain.link_stiffness (at least "
+                f"{20 * tension / p:.3g} N/m keeps this tension within 5 % of the pitch)")
+        raise SimulationDiverged(
+            f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
+            "pitches while the rest of the chain is not stretched; try a smaller solver.step")
 
     def advance_compiled(self, method, t0, t1, x, h, source):
         """The fixed-step loop of :mod:`chainmodel.integrate` (``verlet`` exactly as
@@ -298,6 +329,34 @@ class MultibodyModel(Model):
 
     def stable_step(self, x: np.ndarray) -> float:
         return 1.0 / self.omega_max(x)
+
+    def event_step(self, speed: float) -> float:
+        """Bound on the automatic step: none while the links are damped; with the links' zig-zag
+        mode damped less than UNDAMPED_LINKS of critical, IMPACT_STEP / omega_max. A slack link
+        snapping taut is then an undamped impact on the link spring (half a period,
+        pi / omega, long), and velocity Verlet at 90 % of its stability limit (h omega = 1.8,
+        under two steps per impact) gains energy at such impacts until the run diverges; at
+        h omega = 0.225 (14 steps per impact) the energy error stays at the scheme's O(h^2)
+        (docs/multibody.md "Energy without dissipation")."""
+        p = self.params
+        zeta = p["chain.link_damping"] / math.sqrt(p["chain.link_stiffness"] * p["chain.link_mass"])
+        return math.inf if zeta >= UNDAMPED_LINKS else IMPACT_STEP / self.omega_max()
+
+    def refuse_method(self, method: str) -> str | None:
+        """Why ``method`` is refused at this level (None: accepted). The implicit steppers are:
+        the model is stiff (link zig-zag mode ~18 kHz) *and* non-smooth (seat contacts open and
+        close, links go slack, hundreds of times per tooth period), so Newton iterations fail
+        at the kinks and the step collapses below the explicit stable step; the sprocket rows
+        of the Jacobian are full (any roller may touch a seat), so scipy's finite differences
+        cost a column per state. Measured on xu2010 (0.01 s, docs/multibody.md "Steppers"):
+        radau 22 s, bdf 8 s CPU against about 1 s for verlet and rk45, same answer."""
+        if method in ("radau", "bdf", "lsoda"):
+            return (f"solver.method = {method} is refused at level 3 (multibody): the model is "
+                    "stiff and non-smooth (contacts and slack links switch hundreds of times per "
+                    "tooth period), so implicit steppers take minutes where verlet takes seconds "
+                    "(xu2010, 0.01 s: radau 22 s, bdf 8 s, verlet 1 s CPU); use solver.method = "
+                    "verlet (the default, auto) or rk4")
+        return None
 
     def jacobian_sparsity(self):
         """d(rhs)/dx pattern: dq/dt = v; a roller's acceleration depends on the positions and
@@ -373,6 +432,9 @@ class MultibodyModel(Model):
             "rollers, positive away from the line of centres")
         d["chain.max_link_tension"] = "largest axial link force in the chain"
         d["contact.max_force"] = "largest roller-seat normal contact force"
+        d["chain.min_link_tension"] = ("smallest axial link force in the chain: 0 while a link is "
+                                       "slack (inside its pin-bushing play), negative only while "
+                                       "its plates bear in compression")
         return d
 
     def _engaged(self, x):
@@ -457,6 +519,7 @@ class MultibodyModel(Model):
             "tight_span.midspan_deflection": deflection,
             "chain.max_link_tension": float(np.max(tension)),
             "contact.max_force": float(np.max(self.ws.fcon)),
+            "chain.min_link_tension": float(np.min(tension)),
         }
 
     def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
@@ -496,7 +559,8 @@ class MultibodyModel(Model):
             + 0.5 * p["driven.inertia"] * v[1] ** 2
         z = q[2:].reshape(self.M, 2)
         L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
-        links = 0.5 * p["chain.link_stiffness"] * float(np.sum((L - self.P[K.I_L0]) ** 2))
+        links = float(np.sum(K.link_potential(L - self.P[K.I_L0], p["chain.link_stiffness"],
+                                              self.P[K.I_GAP])))
         self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
         pen = np.where(self.ws.side > 0, self.ws.fcon / p["contact.stiffness"], 0.0)
         contact = 0.5 * p["contact.stiffness"] * float(pen @ pen)

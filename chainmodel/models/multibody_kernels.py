@@ -29,12 +29,12 @@ PARAM_FIELDS = (
     "cx", "cy", "R1", "R2", "phase1", "phase2", "pitch_angle1", "pitch_angle2",
     "sin_gamma1", "cos_gamma1", "sin_gamma2", "cos_gamma2", "tip1", "tip2", "paper_contact",
     "paper_damping", "q_forces", "rigid_shaft", "l_min", "l_max", "z1", "z2", "reach1",
-    "reach2", "cj",
+    "reach2", "cj", "gap", "onset",
 )
 (I_M, I_K, I_C, I_L0, I_KC, I_CC, I_DR, I_GX, I_GY, I_I1, I_I2, I_KR, I_CR, I_C2,
  I_CX, I_CY, I_R1, I_R2, I_PH1, I_PH2, I_TA1, I_TA2, I_SG1, I_CG1, I_SG2, I_CG2, I_TIP1, I_TIP2,
  I_PAPER_CONTACT, I_PAPER_DAMP, I_QF, I_RIGID, I_LMIN, I_LMAX, I_Z1, I_Z2, I_REACH1,
- I_REACH2, I_CJ) = range(len(PARAM_FIELDS))
+ I_REACH2, I_CJ, I_GAP, I_ONSET) = range(len(PARAM_FIELDS))
 #: P holds these scalars, then the tables cos(2 pi j / z1), sin(...) (j < z1), then the same
 #: for z2 (see :func:`pack_tables`): seat directions without trigonometry in the hot loop
 N_PARAMS = len(PARAM_FIELDS)
@@ -99,7 +99,14 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
     status = 0
     for i in range(2, n):
         a[i] = 0.0
-    # links: U = k/2 (|d| - l0)^2, S = c/2 (e . dv)^2 (axial) or c/2 |dv|^2 (paper)
+    # links (tension-only with the joints' free play, docs/multibody.md "Links carry no
+    # compression"): U = k/2 e^2 for e = |d| - l0 > 0, 0 over the pin-bushing play
+    # -gap <= e <= 0, k/2 (e + gap)^2 beyond it (plates bearing); S = c/2 (e . dv)^2 (axial)
+    # or c/2 |dv|^2 (paper) while the spring is engaged, the damping rising from 0 over the
+    # first ``onset`` of engagement (Hunt-Crossley: no force jump when a link snaps taut);
+    # a damper does not push a taut link nor pull a bearing one
+    gap = P[I_GAP]
+    onset = P[I_ONSET]
     for i in range(M):
         j = i + 1
         if j == M:
@@ -116,13 +123,28 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
         dvx = v[2 + 2 * j] - v[2 + 2 * i]
         dvy = v[3 + 2 * j] - v[3 + 2 * i]
         rate = ex * dvx + ey * dvy
-        if paper_damp:
-            T = k * (L - l0)
-            fx = T * ex + c * dvx
-            fy = T * ey + c * dvy
-            tension[i] = T + c * rate
+        e = L - l0
+        if e > 0.0:
+            Ts = k * e
+            cl = c if e >= onset else c * e / onset
+            T = Ts + cl * rate
+            if T < 0.0:
+                T = 0.0
+        elif e < -gap:
+            Ts = k * (e + gap)
+            cl = c if -gap - e >= onset else c * (-gap - e) / onset
+            T = Ts + cl * rate
+            if T > 0.0:
+                T = 0.0
         else:
-            T = k * (L - l0) + c * rate
+            Ts = 0.0
+            T = 0.0
+            cl = 0.0
+        if paper_damp:
+            fx = Ts * ex + cl * dvx
+            fy = Ts * ey + cl * dvy
+            tension[i] = Ts + cl * rate
+        else:
             fx = T * ex
             fy = T * ey
             tension[i] = T
@@ -476,7 +498,8 @@ def spans_numpy(q, dist, side, seat_angle, tol, P, mids, out):
 OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
                 "driven.acceleration", "input_shaft.torque", "tight_span.tension",
                 "slack_span.tension", "tight_span.length", "velocity_ratio", "transmission_error",
-                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force")
+                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force",
+                "chain.min_link_tension")
 
 
 def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
@@ -525,10 +548,13 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
             ny = -ny
         deflection = nx * (mx - ax) + ny * (my - ay)
     tmax = tension[0]
+    tmin = tension[0]
     fmax = fcon[0]
     for i in range(M):
         if tension[i] > tmax:
             tmax = tension[i]
+        if tension[i] < tmin:
+            tmin = tension[i]
         if fcon[i] > fmax:
             fmax = fcon[i]
     out[0] = phi1
@@ -545,6 +571,7 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     out[11] = deflection
     out[12] = tmax
     out[13] = fmax
+    out[14] = tmin
     return status
 
 
@@ -621,6 +648,15 @@ def _prev(a):
     return np.concatenate((a[-1:], a[:-1]))
 
 
+def link_potential(ext, k, gap):
+    """Potential energy [J] of links with extension ``ext`` = L - l0 under the link law of
+    :func:`_accel_loops`: k e^2 / 2 in tension, 0 over the pin-bushing play -gap <= e <= 0,
+    k (e + gap)^2 / 2 once the plates bear."""
+    ext = np.asarray(ext, float)
+    s = np.where(ext > 0.0, ext, np.minimum(ext + gap, 0.0))
+    return 0.5 * k * s * s
+
+
 def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
     """Same as :func:`accel_numba`, vectorised over rollers with numpy (no per-roller loops)."""
     q = np.asarray(q, float)
@@ -648,12 +684,17 @@ def accel_numpy(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
         e = d / Ls[:, None]
     dv = _next(zv) - zv
     rate = np.einsum("ij,ij->i", e, dv)
+    ext = L - l0
+    taut, bear = ext > 0.0, ext < -P[I_GAP]
+    Ts = np.where(taut, k * ext, np.where(bear, k * (ext + P[I_GAP]), 0.0))
+    engaged = np.where(taut, ext, np.where(bear, -P[I_GAP] - ext, 0.0))
+    cl = c * np.minimum(engaged / P[I_ONSET], 1.0)
     if paper_damp:
-        T = k * (L - l0)
-        f = T[:, None] * e + c * dv
-        ws.tension[:] = T + c * rate
+        f = Ts[:, None] * e + cl[:, None] * dv
+        ws.tension[:] = Ts + cl * rate
     else:
-        T = k * (L - l0) + c * rate
+        T = Ts + cl * rate
+        T = np.where(taut, np.maximum(T, 0.0), np.where(bear, np.minimum(T, 0.0), 0.0))
         f = T[:, None] * e
         ws.tension[:] = T
     F += f

@@ -395,6 +395,7 @@ class TorsionalModel(Model):
                                               "gravity at its tension (level 1 spans are straight)")
         d["chain.max_link_tension"] = QUASI_STATIC + "the larger span tension"
         d["contact.max_force"] = QUASI_STATIC + "the tight-span tension (the seats are not modelled)"
+        d["chain.min_link_tension"] = QUASI_STATIC + "the smaller span tension"
         return d
 
     def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
@@ -435,6 +436,7 @@ class TorsionalModel(Model):
         out["tight_span.midspan_deflection"] = self._midspan(aux, upper, tight, length)
         out["chain.max_link_tension"] = max(tight, slack) + centrifugal
         out["contact.max_force"] = tight
+        out["chain.min_link_tension"] = min(tight, slack) + centrifugal
         return out
 
     def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
@@ -479,7 +481,8 @@ class TorsionalModel(Model):
                 "transmission_error": phi2 - ratio * phi1,
                 "tight_span.midspan_deflection": self._midspan_many(aux, upper, tight, length),
                 "chain.max_link_tension": np.maximum(tight, slack) + centrifugal,
-                "contact.max_force": tight.copy()}
+                "contact.max_force": tight.copy(),
+                "chain.min_link_tension": np.minimum(tight, slack) + centrifugal}
 
     def evaluate_states(self, times, states, inputs) -> dict[str, np.ndarray]:
         """Outputs for a sequence of (t, x, u) (convenience for post-processing); ``inputs`` a

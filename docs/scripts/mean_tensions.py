@@ -3,7 +3,8 @@
 
 Run: python docs/scripts/mean_tensions.py
 
-Every run is seed 003's scene (0.05 s ramp, 43.2 N m) for 0.6 s; means over 0.3-0.6 s. For
+Every run is seed 003's scene (0.05 s ramp, 43.2 N m) for 0.6 s; means over 0.3-0.6 s. Level 2 runs
+with its default modal damping and with level 3's span damping (level3_span_damping_ratio). For
 level 3 it also prints the mean geometric excess of each span: the length of the polyline through
 its rollers minus the distance between its endpoint rollers, the extra length that transverse
 motion (and sag) takes out of the span's stretch.
@@ -48,6 +49,23 @@ def running(level, **kw):
     return row
 
 
+def level3_span_damping_ratio():
+    """modal.damping_ratio that gives level 2's first span modes the decay rate level 3's joint
+    dampers give them: sigma = c_j p (pi / l)^4 / (2 rho) (docs/multibody.md, "Convergence and
+    default damping"), divided by level 2's own omega_1 at the static tension (its damping term
+    is 2 zeta m omega_1 q_m'); the mean over both spans."""
+    model = load_scene("xu2010", fidelity=2).model()
+    p = model.params
+    rho = p["chain.link_mass"] / model.drive.pitch
+    t0 = model.static_tension()
+    zetas = []
+    for span, key in (("upper", "l_up"), ("lower", "l_low")):
+        lbar = model.reference[key]
+        sigma = p["chain.joint_damping"] * model.drive.pitch * (math.pi / lbar) ** 4 / (2 * rho)
+        zetas.append(sigma / float(model.modal_frequencies(t0, 0.0, span)[0]))
+    return float(np.mean(zetas))
+
+
 def loaded_at_rest(angle, load=43.2):
     """Level 3 relaxed with the driver held at ``angle`` and the load ramped on over 0.2 s."""
     sc = load_scene("xu2010", fidelity=3)
@@ -69,16 +87,19 @@ if __name__ == "__main__":
         t, s = loaded_at_rest(a)
         print(f"level 3 loaded at rest, driver at {a / tooth:.2f} tooth: "
               f"tight {t:7.1f} N  slack {s:6.1f} N")
+    zeta = level3_span_damping_ratio()
+    print(f"level 3's span damping as a modal damping ratio of level 2: {zeta:.4g}")
     for rpm in (30, 60, 120):
         for label, level, kw in (("level 1", 1, {}), ("level 2", 2, {}),
-                                 ("level 2, undamped span modes", 2, {"modal_damping_ratio": 0.0}),
+                                 ("level 2, level 3's span damping", 2,
+                                  {"modal_damping_ratio": zeta}),
                                  ("level 3", 3, {})):
             row = running(level, input_speed_rpm=rpm, **kw)
             extra = (f"  span excess tight {row[2]:5.1f} um  slack {row[3]:5.1f} um"
                      if len(row) > 2 else "")
-            print(f"{rpm:4d} rpm  {label:30s} tight {row[0]:7.1f} N  slack {row[1]:6.1f} N{extra}")
+            print(f"{rpm:4d} rpm  {label:32s} tight {row[0]:7.1f} N  slack {row[1]:6.1f} N{extra}")
     for label, kw in (("level 3, gravity 0", {"gravity": 0.0}),
                       ("level 3, chain.joint_damping 0.02", {"chain_joint_damping": 0.02})):
         row = running(3, **kw)
-        print(f" 120 rpm  {label:30s} tight {row[0]:7.1f} N  slack {row[1]:6.1f} N"
+        print(f" 120 rpm  {label:32s} tight {row[0]:7.1f} N  slack {row[1]:6.1f} N"
               f"  span excess tight {row[2]:5.1f} um  slack {row[3]:5.1f} um")
