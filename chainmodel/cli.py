@@ -78,6 +78,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.cli", "register_presets"),
     ("chainmodel.analysis.perturbation.cli", "register"),
     ("chainmodel.analysis.tradeoff", "register"),
+    ("chainmodel.analysis.sweep.cli", "register"),
 ]
 
 
