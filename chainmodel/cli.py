@@ -385,6 +385,7 @@ def cmd_run(args) -> int:
     if args.plot:
         from .plots import plot_run
         written.append(("figure", plot_run(result, args.plot, summary)))
+    out["files"] = [str(path) for _, path in written]
     if args.json:
         print_json(out)
     elif not args.quiet:
@@ -540,7 +541,7 @@ def cmd_kinematics(args) -> int:
         from .plots import plot_kinematics
         written.append(("figure", plot_kinematics(data, args.plot)))
     if args.json:
-        print_json(data)
+        print_json({**data, "files": [str(path) for _, path in written]})
         return 0
     s, r = data["seating"], data["release"]
     deg = 180 / math.pi
@@ -623,7 +624,7 @@ def cmd_wrap(args) -> int:
         from .plots import plot_wrap
         written.append(("figure", plot_wrap(data, args.plot)))
     if args.json:
-        print_json(data)
+        print_json({**data, "files": [str(path) for _, path in written]})
         return 0
     rows = [("drive", _describe_drive(drive)),
             ("L_min / p", f"{data['l_min_over_p']:.6f}"),
