@@ -154,16 +154,14 @@ def _warm_worker(study: Study) -> float:
     """Load this process's compiled kernels (numba's on-disk cache) for the study's levels by
     running its first case for a few output intervals; returns the seconds it took."""
     start = time.perf_counter()
-    from ...scene import Scene
-    seen = set()
-    for i in range(len(study)):
+    firsts: dict = {}                   # the first case of each fidelity the study names
+    for i, case in enumerate(study.cases):
+        firsts.setdefault(repr(case.get("fidelity")), i)
+    for i in firsts.values():
         try:
-            sc: Scene = study.scene(i)
+            sc = study.scene(i)
         except ValueError:
             continue
-        if sc.fidelity in seen:
-            continue
-        seen.add(sc.fidelity)
         short = sc.with_overrides(duration=min(sc.duration, 3 * sc.output_interval))
         try:
             if study.fmu is not None:
