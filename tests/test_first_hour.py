@@ -22,16 +22,6 @@ def test_json_output_lists_the_files_written(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["files"] == [str(tmp_path / "r.csv")]
 
 
-def test_frequency_response_combined_names_both_figures_and_shows_progress(tmp_path, capsys):
-    pytest.importorskip("matplotlib")
-    assert cli.main(["frequency-response", "--case", "combined", "--points", "3",
-                     "--plot", str(tmp_path / "fr.png")]) == 0
-    out, err = capsys.readouterr()
-    for name in ("fr_span.png", "fr_sprocket.png"):
-        assert (tmp_path / name).is_file() and f"wrote {tmp_path / name}" in out
-    del err
-
-
 def test_combined_response_reports_its_progress():
     """The progress hook sees the slow time rise to the end of the first integration (T1)."""
     import numpy as np

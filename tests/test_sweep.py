@@ -283,7 +283,7 @@ def test_cli_example_workers_and_serial_write_identical_tables(tmp_path):
     b = (outs["--serial"] / names[0]).read_bytes()
     assert a == b
     table = read_table(outs["--serial"] / names[0])
-    assert len(table["case"]) == 28 * 5 and set(table["status"]) == {"ok"}
+    assert len(table["case"]) == 55 * 6 and set(table["status"]) == {"ok"}
     assert (outs["--serial"] / "campbell.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

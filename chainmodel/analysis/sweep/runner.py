@@ -395,14 +395,22 @@ def run_cases(study: Study, out: str | Path, *, serial: bool = False, workers: i
 
 def _run_on_dask(client, study: Study, pending: list[int], n_workers: int,
                  chunk_size: int | None, record: Callable[[dict], None]) -> tuple[float, int]:
+    import threading
     events: "queue.Queue[dict]" = queue.Queue()
+    wake = threading.Event()            # set by an event or a finished chunk: no busy polling
+
+    def on_event(event):
+        events.put(event[1])
+        wake.set()
     topic = f"chainmodel-sweep-{uuid.uuid4().hex}"
-    client.subscribe_topic(topic, lambda event: events.put(event[1]))
+    client.subscribe_topic(topic, on_event)
     chunks = chunks_for(pending, n_workers, chunk_size)
     t0 = time.perf_counter()
     [study_f] = client.scatter([study], broadcast=True, hash=False)
     futures = {client.submit(_dask_chunk, study_f, chunk, topic, pure=False): chunk
                for chunk in chunks}
+    for fut in futures:
+        fut.add_done_callback(lambda _: wake.set())
     remaining = set(futures)
 
     def drain():
@@ -414,11 +422,11 @@ def _run_on_dask(client, study: Study, pending: list[int], n_workers: int,
 
     try:
         while remaining:
+            wake.wait(timeout=1.0)
+            wake.clear()
             finished = {f for f in remaining if f.done()}
             remaining -= finished
             drain()
-            if not finished:
-                time.sleep(0.02)
             for fut in finished:
                 try:
                     recs = fut.result()
