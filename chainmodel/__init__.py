@@ -23,5 +23,13 @@ from .simulation import Result, simulate
 
 __version__ = "0.1.0"
 
+
+def sweep(study, out=None, **kw):
+    """Run a design study (a study .toml, a dict or a Study) serially or on Dask and write its
+    tables and figures: :func:`chainmodel.analysis.sweep.sweep` (imported on first use)."""
+    from .analysis.sweep import sweep as _sweep
+    return _sweep(study, out, **kw)
+
 __all__ = ["Drive", "Sprocket", "kinematics", "preset", "preset_names", "simulate", "Result",
-           "Scene", "load_scene", "Inputs", "SimulationDiverged", "PARAMETERS", "__version__"]
+           "Scene", "load_scene", "Inputs", "SimulationDiverged", "PARAMETERS", "__version__",
+           "sweep"]

@@ -78,6 +78,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.cli", "register_presets"),
     ("chainmodel.analysis.perturbation.cli", "register"),
     ("chainmodel.analysis.tradeoff", "register"),
+    ("chainmodel.analysis.sweep.cli", "register"),
 ]
 
 
@@ -255,8 +256,10 @@ def register_run(subparsers) -> None:
     p.add_argument("--speed-rpm", type=float, metavar="R", help="steady input-shaft speed [rpm]")
     p.add_argument("--load-torque", type=float, metavar="T", help="load torque on the driven shaft [N.m]")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", dest="settings",
-                   help="set a parameter (chainmodel.parameters names, e.g. chain.link_damping=50) "
-                        "or a scene value (ramp_time, static_tension); repeatable")
+                   help="set a parameter (chainmodel.parameters names, dotted or underscored: "
+                        "chain.link_damping=50 or chain_link_damping=50) or a scene setting "
+                        "(input_speed_rpm, ramp_time, load_torque, static_tension, ...), as the "
+                        "Python API takes them; repeatable")
     p.add_argument("--solver", metavar="METHOD",
                    help="time stepper: auto, rk4, verlet, rk45, dop853, radau, bdf, lsoda")
     p.add_argument("--via-fmu", nargs="?", const="", default=None, metavar="FMU_PATH",
@@ -270,26 +273,32 @@ def register_run(subparsers) -> None:
     p.set_defaults(handler=cmd_run)
 
 
-def _parse_settings(items: Sequence[str]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """--set NAME=VALUE items -> (parameters, scene keyword overrides)."""
-    from .parameters import BY_NAME
-    params: dict[str, Any] = {}
-    scene_kw: dict[str, Any] = {}
-    scene_keys = {"ramp_time", "static_tension"}
+#: scene settings that --set reads as numbers (fidelity takes a name or a level)
+_NUMERIC_SETTINGS = ("duration", "output_interval", "input_speed_rpm", "input_speed",
+                     "ramp_time", "load_torque", "static_tension")
+
+
+def _parse_settings(items: Sequence[str]) -> dict[str, Any]:
+    """--set NAME=VALUE items -> keyword overrides for :meth:`Scene.with_overrides`, which
+    accepts exactly what the Python API does: the scene settings (input_speed_rpm,
+    static_tension, ...) and every parameter, dotted (chain.link_damping) or underscored
+    (chain_link_damping). Unknown names are left for the scene to refuse with the closest
+    names."""
+    from .parameters import BY_NAME, canonical_name
+    out: dict[str, Any] = {}
     for item in items:
         name, sep, text = item.partition("=")
         name, text = name.strip(), text.strip()
         if not sep or not name or not text:
             raise CLIError(f"--set expects NAME=VALUE, got {item!r}")
-        if name in scene_keys:
-            scene_kw[name] = _number(name, text)
-            continue
-        spec = BY_NAME.get(name)
-        if spec is None or name == "fidelity" or spec.kind in (bool, str):
-            params[name] = text            # validated (and unknown names refused) by the scene
+        canon = canonical_name(name)
+        spec = BY_NAME.get(canon) if canon else None
+        if name in _NUMERIC_SETTINGS or (spec is not None and canon != "fidelity"
+                                         and spec.kind not in (bool, str)):
+            out[canon or name] = _number(name, text)
         else:
-            params[name] = _number(name, text)
-    return params, scene_kw
+            out[canon or name] = text       # fidelity, booleans, choices: the scene parses them
+    return out
 
 
 def _number(name: str, text: str) -> float:
@@ -327,17 +336,17 @@ def cmd_run(args) -> int:
         else:
             raise CLIError("give a scene: a preset name (chainmodel presets) or a .toml file")
     _check_outputs(args)
-    params, kw = _parse_settings(args.settings)
+    kw = _parse_settings(args.settings)
     if args.solver is not None:
-        params["solver.method"] = args.solver
+        kw["solver.method"] = args.solver
     for key, value in (("fidelity", args.fidelity), ("duration", args.duration),
                        ("output_interval", args.output_interval),
                        ("input_speed_rpm", args.speed_rpm), ("load_torque", args.load_torque)):
         if value is not None:
             kw[key] = value
     scene = load_scene(scene_arg)
-    if params or kw:
-        scene = scene.with_overrides(parameters=params, **kw)
+    if kw:
+        scene = scene.with_overrides(**kw)
     progress = not (args.quiet or args.json)
     if fmu_arg is not None:
         path = _fmu_path(fmu_arg)
@@ -376,6 +385,7 @@ def cmd_run(args) -> int:
     if args.plot:
         from .plots import plot_run
         written.append(("figure", plot_run(result, args.plot, summary)))
+    out["files"] = [str(path) for _, path in written]
     if args.json:
         print_json(out)
     elif not args.quiet:
@@ -541,7 +551,7 @@ def cmd_kinematics(args) -> int:
         from .plots import plot_kinematics
         written.append(("figure", plot_kinematics(data, args.plot)))
     if args.json:
-        print_json(data)
+        print_json({**data, "files": [str(path) for _, path in written]})
         return 0
     s, r = data["seating"], data["release"]
     deg = 180 / math.pi
@@ -624,7 +634,7 @@ def cmd_wrap(args) -> int:
         from .plots import plot_wrap
         written.append(("figure", plot_wrap(data, args.plot)))
     if args.json:
-        print_json(data)
+        print_json({**data, "files": [str(path) for _, path in written]})
         return 0
     rows = [("drive", _describe_drive(drive)),
             ("L_min / p", f"{data['l_min_over_p']:.6f}"),

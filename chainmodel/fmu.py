@@ -18,7 +18,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["simulate_fmu", "FMUError", "reference_scene", "variables_table", "update_doc_table"]
+__all__ = ["simulate_fmu", "FMUSession", "FMUError", "reference_scene", "variables_table", "update_doc_table"]
 
 
 class FMUError(RuntimeError):
@@ -112,85 +112,66 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
     :class:`FMUError`.
 
     ``result.stats`` has ``communication_steps``, ``wall_time`` and ``fmu`` (the path);
-    ``result.descriptions`` are the chosen level's output descriptions.
+    ``result.descriptions`` are the chosen level's output descriptions. Many runs of one FMU
+    (a sweep) reuse one instance with :class:`FMUSession`.
     """
-    from fmpy import read_model_description
-    from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
+    with FMUSession(fmu_path, log=log) as session:
+        return session.run(scene, progress=progress)
 
-    from .models import SimulationDiverged
-    from .parameters import FIDELITY_NAMES
-    from .scene import load_scene
-    from .simulation import Result, _Progress
 
-    sc = load_scene(scene)
-    fmu_path = Path(fmu_path)
-    if not fmu_path.is_file():
-        raise ValueError(f"FMU {str(fmu_path)!r} does not exist; build it with "
-                         "`python build_fmu.py`")
-    md = read_model_description(str(fmu_path))
-    by_name, outputs = _value_refs(md)
-    missing = [n for n in sc.parameters if n not in by_name]
-    if missing:
-        raise ValueError(f"the FMU {fmu_path.name} has no parameter(s) {', '.join(missing)}; "
-                         "rebuild it from this version of chainmodel")
-    groups: dict[str, tuple[list, list]] = {}
-    for name, value in sc.parameters.items():
-        v = by_name[name]
-        vrs, values = groups.setdefault(v.type, ([], []))
-        vrs.append(v.valueReference)
-        values.append(value)
-    in_vr = [by_name[n].valueReference for n in
-             ("input_shaft.angle", "input_shaft.speed", "load.torque")]
-    out_vr = [by_name[n].valueReference for n in outputs]
-    times = sc.times()
-    data = np.empty((len(times), len(outputs)))
-    logger = _Log(log)
-    bar = _Progress(progress, float(times[-1]),
-                    f"{sc.name} ({FIDELITY_NAMES[sc.fidelity]}, via FMU)")
+class FMUSession:
+    """One FMU, extracted once, and one instance of it reused for many runs.
 
-    unzipdir = _extracted(fmu_path)
-    fmu = None
-    wall = _time.perf_counter()
-    try:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
-                        modelIdentifier=md.coSimulation.modelIdentifier,
-                        instanceName="chainmodel")
-        fmu.instantiate(callbacks=logger.callbacks, loggingOn=True)
-        fmu.setupExperiment(startTime=float(times[0]), stopTime=float(times[-1]))
-        fmu.enterInitializationMode()
-        setters = {"Real": fmu.setReal, "Integer": fmu.setInteger,
-                   "Boolean": fmu.setBoolean, "String": fmu.setString}
-        for typ, (vrs, values) in groups.items():
-            setters[typ](vrs, values)
+    The first :meth:`run` instantiates; each later one calls ``fmi2Reset`` (pythonfmu builds a
+    fresh adapter object, so a run after a reset gives the numbers of a run on a new instance)
+    and re-instantiates only where the reset is refused, e.g. after a failed run. This is how
+    FMPy's parameter-variation example runs a chunk of cases on one instance; a sweep worker
+    keeps one session per chunk. :meth:`close` frees the instance (the shared library stays
+    loaded, see :func:`simulate_fmu`). ``unzipdir``: where the FMU is already extracted
+    (default: extracted once per process into a temporary directory)."""
 
-        def inputs(t):
-            u = sc.inputs(float(t))
-            fmu.setReal(in_vr, [u.angle, u.speed, u.torque])
+    def __init__(self, fmu_path: str | Path, *, log: Callable[[str], None] | None = None,
+                 unzipdir: str | Path | None = None):
+        from fmpy import read_model_description
+        self.path = Path(fmu_path)
+        if not self.path.is_file():
+            raise ValueError(f"FMU {str(self.path)!r} does not exist; build it with "
+                             "`python build_fmu.py`")
+        self.md = read_model_description(str(self.path))
+        self.by_name, self.outputs = _value_refs(self.md)
+        self.logger = _Log(log)
+        self.unzipdir = str(unzipdir) if unzipdir is not None else _extracted(self.path)
+        self.fmu = None
+        self._used = False
+        self.instantiations = 0     # how often an instance was created (resets reuse one)
 
-        inputs(times[0])
-        mark = len(logger.messages)
-        try:
-            fmu.exitInitializationMode()
-        except FMICallException:
-            raise ValueError(logger.problems(mark)) from None
-        data[0] = fmu.getReal(out_vr)
-        for i in range(1, len(times)):
-            mark = len(logger.messages)
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _instance(self):
+        """A fresh or reset instance, ready for setupExperiment."""
+        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi2 import FMU2Slave
+        if self.fmu is not None and self._used:
             try:
-                fmu.doStep(currentCommunicationPoint=float(times[i - 1]),
-                           communicationStepSize=float(times[i] - times[i - 1]))
-            except FMICallException as exc:
-                raise SimulationDiverged(f"FMU step to t = {times[i]:.6g} s failed ({exc}): "
-                                         f"{logger.problems(mark)}") from None
-            inputs(times[i])
-            data[i] = fmu.getReal(out_vr)
-            bar.update(float(times[i]))
-        bar.close()
-        fmu.terminate()
-    except FMICallException as exc:
-        raise FMUError(f"{exc}: {logger.problems()}") from None
-    finally:
+                self.fmu.reset()
+                self._used = False
+                return self.fmu
+            except FMICallException:
+                self._free()
+        if self.fmu is None:
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
+                                 modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                 instanceName="chainmodel")
+            self.fmu.instantiate(callbacks=self.logger.callbacks, loggingOn=True)
+            self.instantiations += 1
+        return self.fmu
+
+    def _free(self):
+        fmu, self.fmu = self.fmu, None
         if fmu is not None and fmu.component is not None:
             # Free the instance but keep the shared library loaded: unloading pythonfmu's
             # wrapper inside a running Python (fmpy's freeInstance does dlclose) corrupts the
@@ -198,17 +179,87 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
             # this workaround). The library is unloaded with the process.
             fmu.fmi2FreeInstance(fmu.component)
             fmu.component = None
-    wall = _time.perf_counter() - wall
 
-    try:   # metadata only: the chosen level's descriptions and static tension
-        model = sc.model()
-        descriptions, static = model.output_descriptions(), model.static_tension()
-    except Exception:
-        descriptions = {n: by_name[n].description or "" for n in outputs}
-        static = math.nan
-    series = {name: data[:, k].copy() for k, name in enumerate(outputs)}
-    stats = {"communication_steps": len(times) - 1, "wall_time": wall, "fmu": str(fmu_path)}
-    return Result(sc, times, series, descriptions, wall, stats, static)
+    def close(self) -> None:
+        self._free()
+
+    def run(self, scene: Any, progress: bool = False):
+        """Simulate ``scene`` on this session's instance (see :func:`simulate_fmu`)."""
+        from fmpy.fmi1 import FMICallException
+
+        from .models import SimulationDiverged
+        from .parameters import FIDELITY_NAMES
+        from .scene import load_scene
+        from .simulation import Result, _Progress
+
+        sc = load_scene(scene)
+        by_name, outputs, logger = self.by_name, self.outputs, self.logger
+        missing = [n for n in sc.parameters if n not in by_name]
+        if missing:
+            raise ValueError(f"the FMU {self.path.name} has no parameter(s) {', '.join(missing)}; "
+                             "rebuild it from this version of chainmodel")
+        groups: dict[str, tuple[list, list]] = {}
+        for name, value in sc.parameters.items():
+            v = by_name[name]
+            vrs, values = groups.setdefault(v.type, ([], []))
+            vrs.append(v.valueReference)
+            values.append(value)
+        in_vr = [by_name[n].valueReference for n in
+                 ("input_shaft.angle", "input_shaft.speed", "load.torque")]
+        out_vr = [by_name[n].valueReference for n in outputs]
+        times = sc.times()
+        data = np.empty((len(times), len(outputs)))
+        bar = _Progress(progress, float(times[-1]),
+                        f"{sc.name} ({FIDELITY_NAMES[sc.fidelity]}, via FMU)")
+
+        wall = _time.perf_counter()
+        try:
+            fmu = self._instance()
+            self._used = True       # from here on, the next run resets (or re-instantiates)
+            fmu.setupExperiment(startTime=float(times[0]), stopTime=float(times[-1]))
+            fmu.enterInitializationMode()
+            setters = {"Real": fmu.setReal, "Integer": fmu.setInteger,
+                       "Boolean": fmu.setBoolean, "String": fmu.setString}
+            for typ, (vrs, values) in groups.items():
+                setters[typ](vrs, values)
+
+            def inputs(t):
+                u = sc.inputs(float(t))
+                fmu.setReal(in_vr, [u.angle, u.speed, u.torque])
+
+            inputs(times[0])
+            mark = len(logger.messages)
+            try:
+                fmu.exitInitializationMode()
+            except FMICallException:
+                raise ValueError(logger.problems(mark)) from None
+            data[0] = fmu.getReal(out_vr)
+            for i in range(1, len(times)):
+                mark = len(logger.messages)
+                try:
+                    fmu.doStep(currentCommunicationPoint=float(times[i - 1]),
+                               communicationStepSize=float(times[i] - times[i - 1]))
+                except FMICallException as exc:
+                    raise SimulationDiverged(f"FMU step to t = {times[i]:.6g} s failed ({exc}): "
+                                             f"{logger.problems(mark)}") from None
+                inputs(times[i])
+                data[i] = fmu.getReal(out_vr)
+                bar.update(float(times[i]))
+            bar.close()
+            fmu.terminate()
+        except FMICallException as exc:
+            raise FMUError(f"{exc}: {logger.problems()}") from None
+        wall = _time.perf_counter() - wall
+
+        try:   # metadata only: the chosen level's descriptions and static tension
+            model = sc.model()
+            descriptions, static = model.output_descriptions(), model.static_tension()
+        except Exception:
+            descriptions = {n: by_name[n].description or "" for n in outputs}
+            static = math.nan
+        series = {name: data[:, k].copy() for k, name in enumerate(outputs)}
+        stats = {"communication_steps": len(times) - 1, "wall_time": wall, "fmu": str(self.path)}
+        return Result(sc, times, series, descriptions, wall, stats, static)
 
 
 # --- documentation -------------------------------------------------------------------------

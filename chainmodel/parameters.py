@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 __all__ = ["Parameter", "PARAMETERS", "BY_NAME", "defaults", "validate", "FIDELITY_NAMES",
-           "fidelity_level", "markdown_table"]
+           "fidelity_level", "markdown_table", "canonical_name", "close_matches",
+           "unknown_name_message", "BY_UNDERSCORE"]
 
 FIDELITY_NAMES = ("kinematic", "torsional", "modal", "multibody")
 
@@ -244,6 +245,44 @@ PARAMETERS: tuple[Parameter, ...] = (
 
 BY_NAME: dict[str, Parameter] = {p.name: p for p in PARAMETERS}
 
+#: every parameter by its name with the dots written as underscores (chain_link_damping), the
+#: form Python keyword arguments need; both forms are accepted wherever a name is.
+BY_UNDERSCORE: dict[str, str] = {p.name.replace(".", "_"): p.name for p in PARAMETERS}
+
+
+def canonical_name(name: str) -> str | None:
+    """The schema name (dotted, ``chain.link_damping``) of ``name`` given in either form
+    (dotted, or with its dots as underscores: ``chain_link_damping``); None if neither."""
+    if name in BY_NAME:
+        return name
+    return BY_UNDERSCORE.get(name)
+
+
+def close_matches(name: str, candidates, n: int = 3) -> list[str]:
+    """Up to ``n`` of ``candidates`` that look like ``name`` (a typo, a missing prefix such as
+    ``link_mass`` for ``chain.link_mass``, or the other of the dotted/underscore forms): names
+    with the same last component first, then difflib's closest, without repeats."""
+    import difflib
+    candidates = list(dict.fromkeys(candidates))
+    same_tail = [c for c in candidates if "." in c and c.split(".")[-1] == name.split(".")[-1]]
+    fuzzy = difflib.get_close_matches(name, candidates, n=n + len(same_tail), cutoff=0.6)
+    fuzzy += difflib.get_close_matches(name.replace("_", "."), candidates, n=n, cutoff=0.6)
+    out = []
+    for c in same_tail + fuzzy:
+        c = canonical_name(c) or c           # report a parameter by its schema name
+        if c not in out:
+            out.append(c)
+    return out[:n]
+
+
+def unknown_name_message(what: str, name: str, candidates) -> str:
+    """``unknown <what> 'name'; did you mean a, b or c?`` (or no suggestion if none is close)."""
+    close = close_matches(name, candidates)
+    if not close:
+        return f"unknown {what} {name!r}"
+    listed = close[0] if len(close) == 1 else ", ".join(close[:-1]) + " or " + close[-1]
+    return f"unknown {what} {name!r}; did you mean {listed}?"
+
 
 def defaults() -> dict[str, Any]:
     """Every parameter at its default value."""
@@ -253,13 +292,16 @@ def defaults() -> dict[str, Any]:
 def validate(values: Mapping[str, Any], base: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Merge ``values`` over ``base`` (defaults if None) and check every entry.
 
-    Unknown names and invalid values raise ValueError naming the parameter."""
+    Names may be dotted (``chain.link_damping``) or underscored (``chain_link_damping``).
+    Unknown names and invalid values raise ValueError naming the parameter (an unknown one with
+    the names closest to it)."""
     out = dict(defaults() if base is None else base)
-    for name, value in values.items():
-        if name not in BY_NAME:
-            close = [n for n in BY_NAME if n.split(".")[-1] == name.split(".")[-1]]
-            hint = f"; did you mean {close[0]}?" if close else ""
-            raise ValueError(f"unknown parameter {name!r}{hint}")
+    for given, value in values.items():
+        name = canonical_name(given)
+        if name is None:
+            raise ValueError(unknown_name_message("parameter", given, list(BY_NAME)
+                                                  + list(BY_UNDERSCORE)) +
+                             " (names: chainmodel.parameters, docs/parameters.md)")
         if name == "fidelity":
             out[name] = fidelity_level(value)
             continue

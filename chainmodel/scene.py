@@ -37,9 +37,20 @@ from .integrate import Stepper, make_stepper
 from .models import Inputs, Model, model_class
 from .presets import INCH, preset, preset_names, reference_values
 
-__all__ = ["Scene", "load_scene", "scene_names", "drive_from_parameters", "OperatingPoint"]
+__all__ = ["Scene", "load_scene", "scene_names", "drive_from_parameters", "OperatingPoint",
+           "SETTINGS", "setting_names"]
 
 RPM = 2 * math.pi / 60
+
+#: the scene settings :meth:`Scene.with_overrides` takes besides the parameters
+SETTINGS = ("fidelity", "duration", "output_interval", "input_speed_rpm", "input_speed",
+            "ramp_time", "load_torque", "static_tension")
+
+
+def setting_names() -> list[str]:
+    """Every name :meth:`Scene.with_overrides` (and so ``simulate``, ``chainmodel run --set`` and
+    a sweep) accepts: the scene settings, then each parameter dotted and underscored."""
+    return list(SETTINGS) + list(P.BY_NAME) + list(P.BY_UNDERSCORE)
 
 
 @dataclass(frozen=True)
@@ -317,22 +328,24 @@ class Scene:
     def with_overrides(self, parameters: Mapping[str, Any] | None = None, **kw) -> "Scene":
         """A copy with parameters and scene values replaced. Keyword names: fidelity, duration,
         output_interval, input_speed_rpm, input_speed (rad/s), ramp_time, load_torque,
-        static_tension, and any parameter with its dots written as underscores
-        (chain_link_mass=...)."""
+        static_tension (:data:`SETTINGS`), and any parameter, dotted (``**{"chain.link_mass":
+        ...}``) or with its dots written as underscores (``chain_link_mass=...``); the same two
+        forms in ``parameters``. An unknown name raises ValueError listing the closest names."""
         params = dict(self.parameters)
-        params.update(parameters or {})
+        for key, value in (parameters or {}).items():
+            params[P.canonical_name(key) or key] = value    # unknown names: validate() refuses
         op = self.operating
         duration, interval = self.duration, self.output_interval
         static = kw.pop("static_tension", None)
-        pretension_given = ("chain.pretension" in (parameters or {})
-                            or kw.get("chain_pretension") is not None
-                            or kw.get("chain.pretension") is not None)
+        pretension_given = (any(P.canonical_name(k) == "chain.pretension"
+                                for k in (parameters or {}))
+                            or any(P.canonical_name(k) == "chain.pretension" and v is not None
+                                   for k, v in kw.items()))
         if static is not None and pretension_given:
             raise ValueError("give either static_tension or chain.pretension, not both: "
                              "static_tension sets chain.pretension")
         if static is None and not pretension_given:
             static = self.static_tension     # keep the target: re-solved at the new level
-        by_underscore = {n.replace(".", "_"): n for n in P.BY_NAME}
         for key, value in kw.items():
             if value is None:
                 continue
@@ -350,14 +363,14 @@ class Scene:
                 op = replace(op, ramp_time=value)
             elif key == "load_torque":
                 op = replace(op, load_torque=_finite("load_torque", value))
-            elif key in P.BY_NAME:
-                params[key] = value
-            elif key in by_underscore:
-                params[by_underscore[key]] = value
+            elif P.canonical_name(key) is not None:
+                params[P.canonical_name(key)] = value
             else:
-                raise ValueError(f"unknown scene setting {key!r}; valid: fidelity, duration, "
-                                 "output_interval, input_speed_rpm, ramp_time, load_torque, "
-                                 "static_tension, or a parameter name (see chainmodel.parameters)")
+                raise ValueError(P.unknown_name_message("scene setting or parameter", key,
+                                                        setting_names())
+                                 + f" (scene settings: {', '.join(SETTINGS)}; parameters: "
+                                 "chainmodel.parameters, docs/parameters.md, dotted or with "
+                                 "underscores)")
         notes = list(self.notes)
         if static is None:
             notes = [n for n in notes if _STATIC_NOTE not in n]

@@ -374,7 +374,7 @@ ERRORS = [
     (["run", "nosuch"], "unknown scene or preset"),
     (["run", "xu2010", "--fidelity", "7"], "fidelity"),
     (["run", "xu2010", "--set", "chain.link_damping=abc"], "not a number"),
-    (["run", "xu2010", "--set", "nonsense=1"], "unknown parameter"),
+    (["run", "xu2010", "--set", "nonsense=1"], "unknown scene setting or parameter"),
     (["run", "xu2010", "--set", "chain.link_damping=-1"], "chain.link_damping"),
     (["run", "xu2010", "--set", "novalue"], "NAME=VALUE"),
     (["run", "xu2010", "--solver", "euler"], "solver.method"),

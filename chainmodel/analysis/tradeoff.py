@@ -71,6 +71,11 @@ def tradeoff(scene: "str | Scene" = "xu2010", levels=(0, 1, 2, 3), reference: in
     for level in levels:
         sc = base.with_overrides(fidelity=level)
         if warmup:
+            if progress:    # the first use of a level can compile its kernels for a minute
+                import sys
+                sys.stderr.write(f"{sc.name} ({FIDELITY_NAMES[level]}): warming up (a first "
+                                 "use compiles the level's kernels)...\n")
+                sys.stderr.flush()
             run_scene(sc.with_overrides(duration=10 * sc.output_interval))
         wall = time.perf_counter()
         result = run_scene(sc, progress=progress)

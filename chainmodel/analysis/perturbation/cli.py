@@ -71,6 +71,31 @@ def _reference(text: str):
         return text
 
 
+class _SlowTimeProgress:
+    """One updating stderr line while the modulation equations integrate (the combined case
+    runs about a minute): slow time reached of the longest integration, elapsed seconds."""
+
+    def __init__(self, label: str, t_end: float):
+        import sys
+        self.err, self.label, self.t_end = sys.stderr, label, t_end
+        self.start = self.last = time.perf_counter()
+        self.reached = 0.0
+
+    def __call__(self, t: float) -> None:
+        self.reached = max(self.reached, float(t))
+        now = time.perf_counter()
+        if now - self.last >= 0.5:
+            self.last = now
+            self.err.write(f"\r{self.label}: slow time {self.reached:.0f} of at most "
+                           f"{self.t_end:g}, {now - self.start:.0f} s elapsed ")
+            self.err.flush()
+
+    def close(self) -> None:
+        if self.last > self.start:          # a line was shown: end it
+            self.err.write("\n")
+            self.err.flush()
+
+
 def run_frequency_response(args) -> int:
     import numpy as np
     from ...cli import drive_dict, drive_from_args, print_json, write_csv_columns
@@ -105,8 +130,16 @@ def run_frequency_response(args) -> int:
     else:
         k = 36 if n is None else n
         step = 3.5 / (k - 1)
-        data = response.combined_response(c, np.linspace(-2.0, 1.5, k),
-                                          np.arange(-1.9, 1.0 + 1e-9, step), policy=args.policy)
+        bar = None if args.json else _SlowTimeProgress(
+            f"frequency-response combined ({k} x {len(np.arange(-1.9, 1.0 + 1e-9, step))} "
+            "points)", 600.0)
+        try:
+            data = response.combined_response(c, np.linspace(-2.0, 1.5, k),
+                                              np.arange(-1.9, 1.0 + 1e-9, step),
+                                              policy=args.policy, progress=bar)
+        finally:
+            if bar is not None:
+                bar.close()
         summary = _combined_summary(c, data)
         S2, SI = np.meshgrid(data["sigma2_ratio"], data["sigma_i_ratio"])
         columns = {"sigma2_over_omega_m": S2.ravel(), "sigma_i_over_omega_m": SI.ravel()}

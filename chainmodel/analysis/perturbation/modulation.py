@@ -162,11 +162,13 @@ class ModulationRun:
     nfev: int
 
 
-def _integrate(y0, rhs, T1, window, rtol, atol, shape=None, t0=0.0):
+def _integrate(y0, rhs, T1, window, rtol, atol, shape=None, t0=0.0, progress=None):
     n = y0.shape[1]
     t_eval = np.linspace(T1 - window, T1, 41)
 
     def f(t, z):
+        if progress is not None:
+            progress(t)         # slow time reached (a CLI progress line; cheap, throttled there)
         return rhs(z.reshape(4, n)).ravel()
 
     sol = solve_ivp(f, (t0, T1), y0.ravel(), method="RK45", rtol=rtol, atol=atol,
@@ -182,7 +184,8 @@ def _integrate(y0, rhs, T1, window, rtol, atol, shape=None, t0=0.0):
 def integrate_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, T1: float = 600.0,
                        window: float = 100.0, policy: str = "inertia", coupled: bool = True,
                        rtol: float = 1e-6, atol: float = 1e-10, tol: float = 1e-3,
-                       y0=None, t0: float = 0.0, epsilon: float = 1.0) -> ModulationRun:
+                       y0=None, t0: float = 0.0, epsilon: float = 1.0,
+                       progress=None) -> ModulationRun:
     """Integrate the combined modulation equations (129-132, Cartesian form) from slow time
     ``t0`` to ``T1`` for every broadcast combination of ``sigma2``, ``sigma_i``, initial
     amplitudes ``a0``, ``v0`` and initial phase ``psi0`` (of b; w starts real), or from the
@@ -201,7 +204,7 @@ def integrate_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, T1: float 
     # hard case in a large batch is integrated less tightly than alone; the fixed points are
     # Newton-polished afterwards (settle_combined), which removes that error where it matters.
     z, a, v, nfev = _integrate(y0, lambda y: combined_rhs(y, k, s2, si, coupled), T1, window,
-                               rtol, atol, shape, t0)
+                               rtol, atol, shape, t0, progress)
     return _run(z, a, v, nfev, shape, tol)
 
 
@@ -225,7 +228,7 @@ class SettledResponse:
 def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str = "inertia",
                     T1: float = 150.0, T1_max: float = 600.0, window: float = 100.0,
                     coupled: bool = True, rtol: float = 1e-5,
-                    epsilon: float = 1.0) -> SettledResponse:
+                    epsilon: float = 1.0, progress=None) -> SettledResponse:
     """Integrate eqs 129-132 (Cartesian form) for the batch to slow time ``T1``, accept the
     cases whose end state Newton-polishes to a nearby (within 5 %) stable fixed point of eqs
     136-139, and integrate the rest on to ``T1_max``; cases that still have not settled are
@@ -236,7 +239,7 @@ def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str =
     s2, si = sigma2.ravel(), sigma_i.ravel()
     run = integrate_combined(c, s2, si, a0.ravel(), v0.ravel(), psi0.ravel(), T1=T1,
                              window=min(window, T1 / 2), policy=policy, coupled=coupled, rtol=rtol,
-                             epsilon=epsilon)
+                             epsilon=epsilon, progress=progress)
     y = run.y_end.reshape(4, -1)
     out = {k: np.array(getattr(run, k)).ravel() for k in ("a_min", "a_max", "v_min", "v_max")}
     ys, ok = _accept(c, y, s2, si, policy, coupled, epsilon)
@@ -244,7 +247,7 @@ def settle_combined(c, sigma2, sigma_i, a0=1e-3, v0=0.0, psi0=0.0, policy: str =
     if np.any(todo):
         run2 = integrate_combined(c, s2[todo], si[todo], y0=y[:, todo], t0=T1, T1=T1_max,
                                   window=window, policy=policy, coupled=coupled, rtol=rtol,
-                                  epsilon=epsilon)
+                                  epsilon=epsilon, progress=progress)
         y[:, todo] = run2.y_end
         for k in out:
             out[k][todo] = getattr(run2, k)

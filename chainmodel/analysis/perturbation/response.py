@@ -68,14 +68,16 @@ def sprocket_response(c, ratio=None, numerical_ratio=None, T1: float = 400.0) ->
 
 
 def combined_response(c, sigma2_ratio=None, sigma_i_ratio=None, policy: str = "inertia",
-                      a0=(1e-3, None), T1: float = 150.0, T1_max: float = 600.0) -> dict:
+                      a0=(1e-3, None), T1: float = 150.0, T1_max: float = 600.0,
+                      progress=None) -> dict:
     """Figs 8-9: span amplitude a and sprocket amplitude v from the combined modulation
     equations 129-132 (section 5.12) on the grid sigma2/omega_m x sigma_i/omega_m.
 
     ``a0`` lists the initial span amplitudes (the sprocket starts at rest); ``None`` stands
     for the decoupled upper branch of eq 105 at that sigma2 with its phase (where it exists,
     else 0.03), so the large-amplitude attractor is found where it coexists with a small one.
-    Arrays have shape (len(a0), len(sigma_i_ratio), len(sigma2_ratio))."""
+    Arrays have shape (len(a0), len(sigma_i_ratio), len(sigma2_ratio)). ``progress(t)`` is
+    called with the slow time reached (up to ``T1_max``), for a progress line."""
     s2r = _grid("sigma2_ratio", sigma2_ratio, np.linspace(-2.0, 1.5, 71))
     sir = _grid("sigma_i_ratio", sigma_i_ratio, np.linspace(-1.95, 1.0, 60))
     S2, SI = np.meshgrid(s2r * c.omega_m, sir * c.omega_m)
@@ -92,7 +94,7 @@ def combined_response(c, sigma2_ratio=None, sigma_i_ratio=None, policy: str = "i
             starts_psi.append(np.zeros(S2.shape))
     A0, P0 = np.stack(starts_a), np.stack(starts_psi)
     res = modulation.settle_combined(c, S2[None], SI[None], a0=A0, psi0=P0, policy=policy,
-                                     T1=T1, T1_max=T1_max)
+                                     T1=T1, T1_max=T1_max, progress=progress)
     return {"omega_m": c.omega_m, "policy": policy, "sigma2_ratio": s2r, "sigma_i_ratio": sir,
             "a0": np.array([np.nan if x is None else x for x in a0]),
             "a": res.a, "v": res.v, "a_min": res.a_min, "a_max": res.a_max,
