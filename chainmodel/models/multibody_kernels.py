@@ -1,6 +1,6 @@
 """Force kernels and fixed-step loops of the multibody model (level 3), in two implementations
 that compute the same thing: explicit loops compiled by numba (fast path) and vectorised numpy
-(fallback for environments without numba, e.g. inside the FMU).
+(fallback for environments without numba, and the tested twin of the compiled path).
 
 The equations are derived in docs/multibody.md from the Lagrangian of seed 003's appendix
 (kinetic energy T eq A1, deformation energy U eq A2, dissipation S eq A3; Lagrange's equation

@@ -8,8 +8,8 @@ is vectorised numpy and costs tens of microseconds for a single sample; the func
 the same computation with the ``math`` module on floats (the same window condition, the same
 fixed-point iteration, the same link counting: tests/test_torsional.py checks them against
 ``chain_geometry`` over many random rotation pairs). They are written in the subset of Python
-that numba compiles; when numba is installed (``pip install chaindrive[fast]``) they are
-compiled once and cached, otherwise they run as plain Python. ``CHAINMODEL_NUMBA=0`` in the
+that numba compiles; numba (a core dependency) compiles them once per machine
+(:mod:`chainmodel.numba_cache`), and without it they run as plain Python. ``CHAINMODEL_NUMBA=0`` in the
 environment forces the plain-Python path (the tests run both).
 
 Conventions: forward-positive rotations phi1 (driver) and phi2 (driven), zero in the reference
