@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from .._numba import numba_requested
+from .._numba import njit, numba_requested
 
 __all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
            "PARAM_FIELDS", "N_PARAMS"]
@@ -546,12 +546,12 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
 
 if HAVE_NUMBA:  # pragma: no branch
     # numba resolves the loop's callees by their global names at compile time
-    _ACCEL = _numba.njit(cache=True)(_accel_loops)
-    _HERMITE = _numba.njit(cache=True)(_hermite)
-    _run_fixed_jit = _numba.njit(cache=True)(_run_fixed_loops)
-    _ENGAGED = _numba.njit(cache=True)(_engaged_loops)
-    _SPANS = _numba.njit(cache=True)(_spans_loops)
-    _outputs_jit = _numba.njit(cache=True)(_outputs_loops)
+    _ACCEL = njit(_accel_loops)
+    _HERMITE = njit(_hermite)
+    _run_fixed_jit = njit(_run_fixed_loops)
+    _ENGAGED = njit(_engaged_loops)
+    _SPANS = njit(_spans_loops)
+    _outputs_jit = njit(_outputs_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
     _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit, _ENGAGED = (
         _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops, _engaged_loops)

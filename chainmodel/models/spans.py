@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .._numba import import_numba
+from .._numba import import_numba, njit
 
 __all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
 
@@ -45,8 +45,8 @@ try:
         raise ImportError
 
     def jit(fn):
-        """Compile with numba (cached on disk); the plain function stays at ``.py_func``."""
-        return _numba.njit(cache=True, fastmath=False)(fn)
+        """Compile with numba (cached once per machine); the plain function stays at ``.py_func``."""
+        return njit(fn, fastmath=False)
 
     NUMBA = True
 except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
