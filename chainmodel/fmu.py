@@ -192,12 +192,7 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
         raise FMUError(f"{exc}: {logger.problems()}") from None
     finally:
         if fmu is not None and fmu.component is not None:
-            # Free the instance but keep the shared library loaded: unloading pythonfmu's
-            # wrapper inside a running Python (fmpy's freeInstance does dlclose) corrupts the
-            # heap at interpreter exit now and then (PythonFMU issue #228; FMPy #147 suggests
-            # this workaround). The library is unloaded with the process.
-            fmu.fmi2FreeInstance(fmu.component)
-            fmu.component = None
+            fmu.freeInstance()   # as fmpy's own simulate_fmu does (docs/fmu.md, "Hosts")
     wall = _time.perf_counter() - wall
 
     try:   # metadata only: the chosen level's descriptions and static tension
