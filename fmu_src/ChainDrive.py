@@ -388,8 +388,10 @@ class ChainDrive(Fmi2Slave):
         if vr in self._param_by_vr:
             p = self._param_by_vr[vr]
             if self._initialized and p.structural:
+                # FMI 2.0 wants fmi2Error here; pythonfmu 0.7 can return only fmi2OK or
+                # fmi2Fatal from a setter, so: fmi2OK, the value ignored, an error logged
                 self.log(_fmi_text(f"parameter {p.name} is fixed after initialization; the new "
-                                   f"value {value!r} is ignored"), Fmi2Status.warning)
+                                   f"value {value!r} is ignored"), Fmi2Status.error)
                 return
             table[vr] = value
             self._params_changed = True
@@ -398,7 +400,7 @@ class ChainDrive(Fmi2Slave):
             self._stale, self._held = True, False
         else:
             self.log(_fmi_text(f"{self.vars[vr].name} is an output and cannot be set; ignored"),
-                     Fmi2Status.warning)
+                     Fmi2Status.error)
 
     def _getter(self, table, kind, vrs):
         if self._stale or (self._params_changed and not self._initialized):

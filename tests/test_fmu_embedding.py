@@ -233,3 +233,36 @@ def test_host_life_then_exit_20_processes(chaindrive_fmu, tmp_path):
         results = list(pool.map(one, range(20)))
     failed = [r for r in results if r[0] != 0 or r[1] != "done"]
     assert not failed, f"{len(failed)} of 20 processes failed: {failed[:3]}"
+
+
+# --- statuses pythonfmu lets us return ----------------------------------------------------------
+
+def test_refused_sets_return_ok_and_log_an_error_naming_the_variable(chaindrive_fmu_dir):
+    """FMI 2.0 prescribes fmi2Error for setting a fixed parameter after initialization or an
+    output; pythonfmu 0.7 lets a setter return only fmi2OK or fmi2Fatal (docs/fmu.md,
+    "Statuses"), so the value is ignored and an ERROR-status message names the variable."""
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    from chainmodel.fmu import _Log
+    md = read_model_description(str(chaindrive_fmu_dir))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    log = _Log()
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(chaindrive_fmu_dir),
+                  modelIdentifier="ChainDrive", instanceName="statuses")
+    s.instantiate(callbacks=log.callbacks, loggingOn=True)
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.setInteger([vr["fidelity"]], [0])
+        s.exitInitializationMode()
+        before = s.getReal([vr["drive.pitch"], vr["driven.speed"]])
+        s.setReal([vr["drive.pitch"]], [0.02])          # fixed parameter: no exception = OK
+        s.setReal([vr["driven.speed"]], [123.0])        # an output
+        after = s.getReal([vr["drive.pitch"], vr["driven.speed"]])
+        assert after == before
+        errors = [m for status, m in log.messages if status == 3]   # fmi2Error
+        assert any("drive.pitch" in m and "fixed after initialization" in m for m in errors)
+        assert any("driven.speed" in m and "output" in m for m in errors)
+    finally:
+        s.freeInstance()
