@@ -266,3 +266,16 @@ def test_refused_sets_return_ok_and_log_an_error_naming_the_variable(chaindrive_
         assert any("driven.speed" in m and "output" in m for m in errors)
     finally:
         s.freeInstance()
+
+
+def test_an_incomplete_resources_folder_is_reported_not_crashed(tmp_path, capfd):
+    """A host that passes a resources folder without the vendored package gets a sentence
+    (naming the folder and the C/C++ recipe) as an ImportError and on stderr."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("_test_adapter_resources",
+                                                  ROOT / "fmu_src" / "ChainDrive.py")
+    adapter = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(adapter)
+    with pytest.raises(ImportError, match="copy of the chainmodel package is missing"):
+        adapter.ChainDrive(instance_name="x", resources=str(tmp_path))
+    assert "PYTHONHOME" in capfd.readouterr().err
