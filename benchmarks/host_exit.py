@@ -41,15 +41,26 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             log = Path(tmp) / "vg.txt"
             env = dict(os.environ, PYTHONMALLOC="malloc", CHAINMODEL_NUMBA="0")
-            subprocess.run(["valgrind", f"--log-file={log}", sys.executable, "-c", code],
-                           env=env, capture_output=True)
-            text = log.read_text()
-        blocks = text.split("\n==")
-        wrapper = [b for b in re.split(r"\n==\d+== \n", text)
-                   if "Invalid" in b and ("ChainDrive.so" in b or "finalizePython" in b)]
-        print(f"valgrind: {len(wrapper)} invalid access(es) inside pythonfmu's wrapper")
-        for b in wrapper[:3]:
-            print(b[:1500])
+            proc = subprocess.run(["valgrind", f"--log-file={log}", sys.executable, "-c", code],
+                                  env=env, capture_output=True, text=True)
+            lines = log.read_text().splitlines()
+        # an error report: "Invalid ..." then its stack ("at"/"by" lines) up to a blank line
+        reports, current = [], None
+        for line in lines:
+            body = re.sub(r"^==\d+== ?", "", line)
+            if body.startswith("Invalid"):
+                current = [body]
+                reports.append(current)
+            elif current is not None and body.strip():
+                current.append(body)
+            else:
+                current = None
+        wrapper = [r for r in reports
+                   if any("ChainDrive.so" in ln or "finalizePython" in ln for ln in r[:4])]
+        print(f"valgrind ({len(reports)} reports, process exit {proc.returncode}): "
+              f"{len(wrapper)} invalid access(es) inside pythonfmu's wrapper")
+        for r in wrapper[:3]:
+            print("\n".join(r[:12]))
         return 0
     counts = collections.Counter()
     for k in range(args.runs):
