@@ -88,7 +88,7 @@ class _Master:
 
     def close(self):
         self.fmu.terminate()
-        self.fmu.fmi2FreeInstance(self.fmu.component)   # no dlclose: PythonFMU #228
+        self.fmu.freeInstance()
 
 
 def adapter_cost(steps: int = 20000) -> float:

@@ -1,16 +1,19 @@
-"""The one switch for the optional numba acceleration of levels 1-3.
+"""The one switch for numba in chainmodel, and the decorator every compiled kernel uses.
 
-numba is an optional extra (``pip install chaindrive[fast]``; the test extra includes it). Every
-compiled kernel has a plain numpy/Python twin that computes the same thing (tests compare them).
-The environment variable ``CHAINMODEL_NUMBA=0`` (or false/no/off) selects the plain paths even
-where numba is installed - as inside the FMU's own environment, which has no numba.
+numba is a core dependency. Every compiled kernel has a plain numpy/Python twin that computes
+the same thing (tests compare them); ``CHAINMODEL_NUMBA=0`` (or false/no/off) in the
+environment selects the plain paths even where numba is installed.
+
+Kernels are compiled with :func:`njit` (never ``numba.njit(cache=True)``): it attaches the
+per-machine cache of :mod:`chainmodel.numba_cache`, which survives the FMU's fresh extraction
+folders and never loads a kernel compiled from other sources (docs/numba_cache.md).
 """
 
 from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba"]
+__all__ = ["numba_requested", "import_numba", "njit"]
 
 
 def numba_requested() -> bool:
@@ -27,3 +30,11 @@ def import_numba():
     except Exception:  # pragma: no cover - depends on the environment
         return None
     return numba
+
+
+def njit(fn=None, **options):
+    """Compile ``fn`` with numba in nopython mode, cached once per machine
+    (:func:`chainmodel.numba_cache.cached_njit`). Needs numba importable; callers keep their
+    plain twin for ``CHAINMODEL_NUMBA=0``."""
+    from .numba_cache import cached_njit
+    return cached_njit(fn, **options)

@@ -6,6 +6,7 @@ Subcommands (``chainmodel SUBCOMMAND --help`` for the flags; docs/cli.md for the
     chainmodel kinematics (--preset NAME | --driver-teeth N --driven-teeth N --span-pitches N --pitch-fraction F) [--json]
     chainmodel wrap (--preset NAME | ... --links M) [--json]
     chainmodel presets [--json]
+    chainmodel cache [--info | --clear] [--json]
 
 Conventions: SI units everywhere except the flags that say otherwise (``--speed-rpm``);
 ``--json`` prints exactly one JSON object on stdout (snake_case keys, SI units, ``null`` for a
@@ -79,6 +80,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.analysis.perturbation.cli", "register"),
     ("chainmodel.analysis.tradeoff", "register"),
     ("chainmodel.analysis.sweep.cli", "register"),
+    ("chainmodel.cache", "register"),
 ]
 
 

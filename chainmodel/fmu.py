@@ -126,8 +126,8 @@ class FMUSession:
     fresh adapter object, so a run after a reset gives the numbers of a run on a new instance)
     and re-instantiates only where the reset is refused, e.g. after a failed run. This is how
     FMPy's parameter-variation example runs a chunk of cases on one instance; a sweep worker
-    keeps one session per chunk. :meth:`close` frees the instance (the shared library stays
-    loaded, see :func:`simulate_fmu`). ``unzipdir``: where the FMU is already extracted
+    keeps one session per chunk. :meth:`close` frees the instance as fmpy does (the FMU pins
+    pythonfmu's library, so the unload is harmless; docs/fmu.md, "Hosts"). ``unzipdir``: where the FMU is already extracted
     (default: extracted once per process into a temporary directory)."""
 
     def __init__(self, fmu_path: str | Path, *, log: Callable[[str], None] | None = None,
@@ -173,12 +173,7 @@ class FMUSession:
     def _free(self):
         fmu, self.fmu = self.fmu, None
         if fmu is not None and fmu.component is not None:
-            # Free the instance but keep the shared library loaded: unloading pythonfmu's
-            # wrapper inside a running Python (fmpy's freeInstance does dlclose) corrupts the
-            # heap at interpreter exit now and then (PythonFMU issue #228; FMPy #147 suggests
-            # this workaround). The library is unloaded with the process.
-            fmu.fmi2FreeInstance(fmu.component)
-            fmu.component = None
+            fmu.freeInstance()   # as fmpy's own simulate_fmu does (docs/fmu.md, "Hosts")
 
     def close(self) -> None:
         self._free()

@@ -11,23 +11,6 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="session", autouse=True)
-def _keep_fmu_libraries_loaded():
-    """Never dlclose an FMU's shared library inside this process: unloading pythonfmu's wrapper
-    from a running Python corrupts the heap at interpreter exit now and then (PythonFMU #228),
-    which would abort pytest after the tests passed. chainmodel.fmu.simulate_fmu does the same
-    for users; here fmpy's own freeInstance()/simulate_fmu are covered as well."""
-    try:
-        from fmpy import fmi1
-    except ImportError:  # pragma: no cover - fmpy is a core dependency
-        yield
-        return
-    original = fmi1._FMU.freeLibrary
-    fmi1._FMU.freeLibrary = lambda self: None
-    yield
-    fmi1._FMU.freeLibrary = original
-
-
 @pytest.fixture(scope="session")
 def chaindrive_fmu(tmp_path_factory) -> Path:
     """ChainDrive.fmu built ONCE per test session, with `python build_fmu.py` exactly as a user

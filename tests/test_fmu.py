@@ -73,10 +73,7 @@ class Slave:
         return " | ".join(m for _, m in self.log.messages)
 
     def free(self):
-        # free the instance but never dlclose pythonfmu's wrapper in a live Python: it corrupts
-        # the heap at interpreter exit now and then (PythonFMU #228; see tests/conftest.py)
-        self.fmu.fmi2FreeInstance(self.fmu.component)
-        self.fmu.component = None
+        self.fmu.freeInstance()   # fmpy's own call, library unload included
 
 
 def library_outputs(model, t, x, u):
@@ -467,14 +464,14 @@ VENDORED_CHECK = textwrap.dedent(r"""
     md = read_model_description(FMU)
     unzipdir = extract(FMU, UNZIP)
 
-    allowed = set(sys.stdlib_module_names) | {"numpy", "scipy", "pythonfmu", "ChainDrive"}
+    allowed = set(sys.stdlib_module_names) | {"numpy", "scipy", "pythonfmu"}
     blocked = []
 
     class OnlyNumpyScipy(importlib.abc.MetaPathFinder):
         # from here on a Python with only the standard library, numpy, scipy and pythonfmu
         def find_spec(self, name, path=None, target=None):
             top = name.split(".")[0]
-            if (top in allowed or top.startswith("_chaindrive_fmu_")
+            if (top in allowed or top.startswith(("_chaindrive_", "chaindrive_"))
                     or top.startswith("_sysconfigdata_")):   # the platform part of the stdlib
                 return None
             blocked.append(name)
@@ -495,8 +492,9 @@ VENDORED_CHECK = textwrap.dedent(r"""
     out = dict(zip(["driver.angle", "driver.speed", "driven.speed"],
                    fmu.getReal([vr["driver.angle"], vr["driver.speed"], vr["driven.speed"]])))
     fmu.terminate()
-    fmu.fmi2FreeInstance(fmu.component)   # no dlclose: PythonFMU #228 (see conftest.py)
-    vendored = [m for m in sys.modules if m.startswith("_chaindrive_fmu_")]
+    fmu.freeInstance()
+    vendored = [m for m in sys.modules if m.startswith("_chaindrive_") and "." not in m
+                and not m.endswith("_adapter")]
     print(json.dumps({"out": out, "blocked": blocked,
                       "chainmodel_file": sys.modules["chainmodel"].__file__,
                       "vendored": sorted(vendored),

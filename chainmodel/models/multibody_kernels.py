@@ -1,6 +1,6 @@
 """Force kernels and fixed-step loops of the multibody model (level 3), in two implementations
 that compute the same thing: explicit loops compiled by numba (fast path) and vectorised numpy
-(fallback for environments without numba, e.g. inside the FMU).
+(fallback for environments without numba, and the tested twin of the compiled path).
 
 The equations are derived in docs/multibody.md from the Lagrangian of seed 003's appendix
 (kinetic energy T eq A1, deformation energy U eq A2, dissipation S eq A3; Lagrange's equation
@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from .._numba import numba_requested
+from .._numba import njit, numba_requested
 
 __all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
            "PARAM_FIELDS", "N_PARAMS"]
@@ -577,12 +577,12 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
 
 if HAVE_NUMBA:  # pragma: no branch
     # numba resolves the loop's callees by their global names at compile time
-    _ACCEL = _numba.njit(cache=True)(_accel_loops)
-    _HERMITE = _numba.njit(cache=True)(_hermite)
-    _run_fixed_jit = _numba.njit(cache=True)(_run_fixed_loops)
-    _ENGAGED = _numba.njit(cache=True)(_engaged_loops)
-    _SPANS = _numba.njit(cache=True)(_spans_loops)
-    _outputs_jit = _numba.njit(cache=True)(_outputs_loops)
+    _ACCEL = njit(_accel_loops)
+    _HERMITE = njit(_hermite)
+    _run_fixed_jit = njit(_run_fixed_loops)
+    _ENGAGED = njit(_engaged_loops)
+    _SPANS = njit(_spans_loops)
+    _outputs_jit = njit(_outputs_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
     _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit, _ENGAGED = (
         _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops, _engaged_loops)

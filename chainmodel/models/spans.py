@@ -8,8 +8,8 @@ is vectorised numpy and costs tens of microseconds for a single sample; the func
 the same computation with the ``math`` module on floats (the same window condition, the same
 fixed-point iteration, the same link counting: tests/test_torsional.py checks them against
 ``chain_geometry`` over many random rotation pairs). They are written in the subset of Python
-that numba compiles; when numba is installed (``pip install chaindrive[fast]``) they are
-compiled once and cached, otherwise they run as plain Python. ``CHAINMODEL_NUMBA=0`` in the
+that numba compiles; numba (a core dependency) compiles them once per machine
+(:mod:`chainmodel.numba_cache`), and without it they run as plain Python. ``CHAINMODEL_NUMBA=0`` in the
 environment forces the plain-Python path (the tests run both).
 
 Conventions: forward-positive rotations phi1 (driver) and phi2 (driven), zero in the reference
@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .._numba import import_numba
+from .._numba import import_numba, njit
 
 __all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
 
@@ -45,8 +45,8 @@ try:
         raise ImportError
 
     def jit(fn):
-        """Compile with numba (cached on disk); the plain function stays at ``.py_func``."""
-        return _numba.njit(cache=True, fastmath=False)(fn)
+        """Compile with numba (cached once per machine); the plain function stays at ``.py_func``."""
+        return njit(fn, fastmath=False)
 
     NUMBA = True
 except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
