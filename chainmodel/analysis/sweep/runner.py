@@ -7,9 +7,9 @@ instance per chunk): the cases still to run are dealt round-robin into chunks (s
 mixes cheap and dear cases and the chunks cost about the same), one task per chunk. A chunk
 runs its cases one after the other in one worker process: through the library, or through one
 FMU instance reused between cases with fmi2Reset (re-instantiated where a reset is refused),
-the FMU extracted once per machine (keyed by its hash, so its numba kernels compile once per
-machine too). Library kernels are numba's on-disk cache (cache=True): compiled once per machine,
-loaded once per worker process, never per case.
+the FMU extracted once per machine (keyed by its hash, so workers share one copy). Kernels, the
+library's and the FMU's, come from the per-machine numba cache (chainmodel.numba_cache,
+docs/numba_cache.md): compiled once per machine, loaded once per worker process, never per case.
 
 Results stream back as cases finish: a worker publishes each finished case as a Dask event
 (``log_event``) and the client appends it to ``cases.jsonl`` at once; the chunk's return value
