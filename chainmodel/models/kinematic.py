@@ -175,7 +175,31 @@ class KinematicModel(Model):
                                        out["slack_span.tension"], out["tight_span.length"]))
         return out
 
+    @cached_property
+    def _kernel_constants(self):
+        """(K, G, C) of the scalar compiled evaluation (:mod:`.kinematic_kernel`)."""
+        from . import kinematic_kernel as KK
+        from .spans import geometry_constants
+        p, d = self.params, self.drive
+        C = np.empty(KK.C_SIZE)
+        C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],
+                                              p["driven.damping"])
+        C[KK.C_SUM] = 2 * self._static_tension
+        C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
+                                                          * math.cos(p["drive.inclination"]))
+        C[KK.C_RATIO] = d.tooth_ratio
+        return KK.fourbar_constants(d), geometry_constants(d), C
+
+    def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
+        """Every output (ALL_OUTPUTS order) into ``out``: the scalar compiled twin of
+        :meth:`evaluate` (:func:`.kinematic_kernel.level0_outputs`), one call."""
+        from .kinematic_kernel import level0_outputs
+        K, G, C = self._kernel_constants
+        level0_outputs(float(angle), float(speed), float(acceleration), float(torque), K, G, C,
+                       out)
+
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
-        res = self.evaluate(u.angle, u.speed, u.acceleration, u.torque)
-        return {k: float(v) for k, v in res.items()}
+        out = np.empty(len(ALL_OUTPUTS))
+        self.outputs_into(t, x, u.angle, u.speed, u.acceleration, u.torque, out)
+        return {o.name: float(v) for o, v in zip(ALL_OUTPUTS, out)}
 

@@ -55,9 +55,6 @@ __all__ = ["MultibodyModel", "flank_geometry"]
 ENGAGED_TOLERANCE = 0.002
 #: the driver is "at rest" below this speed [rad/s]; velocity_ratio is then the geometric one
 REST_SPEED = 1e-3
-#: communication steps are split into chunks of at most this many fixed steps for the compiled
-#: loop (the inputs are interpolated by a cubic Hermite within a chunk)
-CHUNK_STEPS = 64
 
 
 def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[float, float, float]:
@@ -144,7 +141,6 @@ class MultibodyModel(Model):
                                [self._mid_lower.real, self._mid_lower.imag]])
         self._spans_out = np.zeros((2, 3), np.int64)
         self._out14 = np.zeros(len(K.OUTPUT_NAMES))
-        self._verified = None
         self._engaged_tol = clearance + ENGAGED_TOLERANCE * pitch
 
     # --- state -----------------------------------------------------------------------------
@@ -216,8 +212,6 @@ class MultibodyModel(Model):
         return out
 
     def check(self, t: float, x: np.ndarray) -> None:
-        if x is self._verified:
-            return
         super().check(t, x)
         n = 2 + 2 * self.M
         z = x[2:n].reshape(self.M, 2)
@@ -232,46 +226,84 @@ class MultibodyModel(Model):
                 f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
                 "pitches; try a smaller solver.step or solver.method = radau")
 
-    def advance_compiled(self, method, t0, t1, x, h, source):
-        """The fixed-step loop of :mod:`chainmodel.integrate` (``verlet`` exactly as
-        ``Verlet._step``, ``rk4`` as ``RK4._step``) compiled with numba over one communication
-        step; None (use the Python loop) without numba. Inputs inside a chunk of at most
-        CHUNK_STEPS steps come from a cubic Hermite through the chunk ends' angle and speed
-        (exact for the held and ramp profiles). Returns (x, steps, events, evaluations, [])."""
-        if not self.use_numba or method not in ("verlet", "rk4"):
+    # --- compiled stepping (multibody_kernels, numba) ------------------------------------
+    #: fixed-step methods with a compiled loop: advance_points / advance_held
+    compiled_methods = ("verlet", "rk4")
+    #: the automatic step is the stability bound of the current state (90 % of it, the
+    #: stable-step guard re-estimating it every communication step); solver.tolerance is not
+    #: used: the bound comes from the stiff roller-seat and link modes, and at that step the
+    #: outputs are converged well below it (docs/numerics.md, level 3)
+    tolerance_applies = False
+
+    def _compiled(self, method) -> bool:
+        return self.use_numba and method in self.compiled_methods
+
+    def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
+                       out, states, log, log_cap):
+        """The fixed-step loop of ``method`` (verlet exactly as ``Verlet._step``, rk4 as
+        ``RK4._step``) through the communication points ``times`` in one compiled call, with
+        the outputs at every point (multibody_kernels._advance_points_loops); None without
+        numba. Inputs inside a communication step: a cubic Hermite through its ends' angle and
+        speed (exact for held inputs and the scene ramps)."""
+        if not self._compiled(method):
             return None
-        code = 0 if method == "verlet" else 1
-        n = max(1, math.ceil((t1 - t0) / h - 1e-9))
-        hh = (t1 - t0) / n
-        x = np.array(x, float)
-        done = 0
-        u0 = source(t0)  # inputs may change at a communication point (FMU): never reuse u1
-        while done < n:
-            m = min(CHUNK_STEPS, n - done)
-            ta = t0 + done * hh
-            tb = t0 + (done + m) * hh if done + m < n else t1
-            u1 = source(tb)
-            bad = K.run_fixed_numba(code, x, ta, hh, m, ta, tb - ta, u0.angle, u0.speed,
-                                    u1.angle, u1.speed, u0.torque, u1.torque, self.P, self.ws)
-            if bad >= 0:
-                tb = ta + (bad + 1) * hh
-                self.check(tb, x)
-                raise SimulationDiverged(f"multibody model diverged at t = {tb:.6g} s "
-                                         f"(non-finite forces); try a smaller solver.step")
-            done += m
-            u0 = u1
-        self._verified = x  # the compiled loop checked every link and coordinate of this state
-        evals = n * (2 if code == 0 else 4)
-        return x, n, 0, evals, []
+        res = K.advance_points_numba(0 if method == "verlet" else 1, x_in, x_out, times, angle,
+                                     speed, acceleration, torque, self.P, self._omega_constants,
+                                     cfg, self.ws, self._mids, self._engaged_tol,
+                                     self.drive.tooth_ratio, self._spans_out, out, states)
+        if out.shape[0] and res[1] == 0:
+            rows = slice(1, times.shape[0])
+            self._ratio_at_rest(out[rows], angle[rows], speed[rows])
+        return res
+
+    def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque, cfg,
+                     out, log):
+        """:meth:`advance_points` over one communication step with the inputs held first-order
+        (the FMU's hold), outputs at t1 in out[1]; None without numba."""
+        if not self._compiled(method):
+            return None
+        res = K.advance_held_numba(0 if method == "verlet" else 1, x_in, x_out, t0, t1, angle,
+                                   speed, acceleration, torque, self.P, self._omega_constants,
+                                   cfg, self.ws, self._mids, self._engaged_tol,
+                                   self.drive.tooth_ratio, self._spans_out, out)
+        if res[1] == 0 and abs(out[1, 1]) < REST_SPEED:
+            self._ratio_at_rest(out[1:2], np.array([angle + speed * (t1 - t0)]),
+                                np.array([speed]))
+        return res
+
+    def _ratio_at_rest(self, rows, angle, speed) -> None:
+        """velocity_ratio of the rows whose driver is at rest (|speed| < REST_SPEED): the exact
+        four-bar ratio at the driver's angle (level 0), as :meth:`outputs` reports it."""
+        rest = np.abs(rows[:, 1]) < REST_SPEED
+        if not rest.any():
+            return
+        for rev in (False, True):
+            sel = rest & ((np.asarray(speed) < 0) == rev)
+            if sel.any():
+                rows[sel, 9] = driven_rotation(self.drive, rows[sel, 0], reverse=rev).velocity_ratio
+
+    def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
+        """Every output (ALL_OUTPUTS order) into ``out``: one compiled call with numba."""
+        if not self.use_numba:
+            return super().outputs_into(t, x, angle, speed, acceleration, torque, out)
+        K.outputs_numba(x, angle, speed, acceleration, torque, self.P, self.ws, self._mids,
+                        self._engaged_tol, speed < 0, self.drive.tooth_ratio, self._spans_out,
+                        out)
+        if abs(out[1]) < REST_SPEED:
+            self._ratio_at_rest(out.reshape(1, -1), np.array([angle]), np.array([speed]))
+
+    def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
+        return self.omega_max(x)
 
     # --- capabilities ----------------------------------------------------------------------
     def omega_max(self, x=None) -> float:
         """Upper bound of the highest natural frequency [rad/s] (Gershgorin on the
         mass-normalised tangent stiffness; derivation in docs/multibody.md), raised to the
-        damping rate (4 c + c_c + 16 c_j / p^2) / m if that is larger."""
-        p, d = self.params, self.drive
-        m, k = p["chain.link_mass"], p["chain.link_stiffness"]
-        kc = p["contact.stiffness"]
+        damping rate (4 c + c_c + 16 c_j / p^2) / m if that is larger. With a state x the links
+        count with their current stiffness max(k, |T| / L) (the guard of the compiled loop,
+        multibody_kernels._omega_loops, computes the same)."""
+        p = self.params
+        k = p["chain.link_stiffness"]
         k_link = k
         if x is not None:
             n = 2 + 2 * self.M
@@ -280,21 +312,32 @@ class MultibodyModel(Model):
             if np.all(np.isfinite(L)) and np.all(L > 0):
                 tension = k * (L - self.P[K.I_L0])
                 k_link = max(k, float(np.max(np.abs(tension) / L)))
-        w2 = 0.0
+        om = self._omega_constants
+        return max(math.sqrt(max(om[0] * k_link + om[1], om[2])), om[3])
+
+    @cached_property
+    def _omega_constants(self) -> np.ndarray:
+        """[4 / m, k_c / m + the larger seat coupling, the larger sprocket term, the damping
+        rate] of :meth:`omega_max`: a roller's w^2 is (4 k_link + k_c) / m + k_c r /
+        sqrt(m I) (r = R + tip) for the sprocket it touches, a sprocket's (extra + z k_c r^2) /
+        I + z k_c r / sqrt(m I) with z = min(teeth, M) seats and extra the shaft stiffness."""
+        p, d = self.params, self.drive
+        m = p["chain.link_mass"]
+        kc = p["contact.stiffness"]
+        roller, sprocket = 0.0, 0.0
         for teeth, R, tip, inertia, extra in (
                 (d.n_driver, d.driver.pitch_radius, self.P[K.I_TIP1], p["driver.inertia"],
                  p["input_shaft.stiffness"]),
                 (d.n_driven, d.driven.pitch_radius, self.P[K.I_TIP2], p["driven.inertia"], 0.0)):
             r = R + tip
             coupling = kc * r / math.sqrt(m * inertia)
-            roller = (4 * k_link + kc) / m + coupling
             seats = min(teeth, self.M)
-            sprocket = (extra + seats * kc * r * r) / inertia + seats * coupling
-            w2 = max(w2, roller, sprocket)
+            roller = max(roller, kc / m + coupling)
+            sprocket = max(sprocket, (extra + seats * kc * r * r) / inertia + seats * coupling)
         # joint dampers act through 1/L^2 lever arms on up to 4 joints of a roller's two links
         damping_rate = (4 * p["chain.link_damping"] + p["contact.damping"]
                         + 16 * p["chain.joint_damping"] / d.pitch ** 2) / m
-        return max(math.sqrt(w2), damping_rate)
+        return np.array([4.0 / m, roller, sprocket, damping_rate])
 
     def stable_step(self, x: np.ndarray) -> float:
         return 1.0 / self.omega_max(x)
