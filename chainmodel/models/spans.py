@@ -20,7 +20,8 @@ the driven sprocket.
 
 Layout of the constant vectors (built by :func:`geometry_constants` and the models):
 
-``G`` (geometry): theta4s, theta2s, alpha_c, alpha_o, R_c, R_o, x_c, y_c, theta1, n_c, n_o, N, M.
+``G`` (geometry): theta4s, theta2s, alpha_c, alpha_o, R_c, R_o, x_c, y_c, theta1, n_c, n_o, N, M,
+then the seat-direction tables of both sprockets (:func:`geometry_constants`).
 """
 
 from __future__ import annotations
@@ -58,64 +59,84 @@ except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
 
 
 def geometry_constants(drive) -> np.ndarray:
-    """The constant vector ``G`` of a drive (module docstring)."""
+    """The constant vector ``G`` of a drive (module docstring), followed by the seat-direction
+    tables cos(2 pi j / n), sin(2 pi j / n) of the driver (j < n_driver) and of the driven
+    sprocket: seat positions by the angle-sum formula, without trigonometry per seat."""
     from ..kinematics import fourbar as fb
     s = fb.seating(drive)
     m = -1 if drive.links is None else drive.links
-    return np.array([s.theta4, s.theta2, math.pi / drive.n_driver, math.pi / drive.n_driven,
+    head = np.array([s.theta4, s.theta2, math.pi / drive.n_driver, math.pi / drive.n_driven,
                      drive.driver.pitch_radius, drive.driven.pitch_radius, drive.x_c, drive.y_c,
                      drive.centre_angle, drive.n_driver, drive.n_driven, drive.span_pitches, m],
                     float)
+    tables = []
+    for n in (drive.n_driver, drive.n_driven):
+        j = np.arange(n)
+        tables += [np.cos(2 * np.pi * j / n), np.sin(2 * np.pi * j / n)]
+    return np.concatenate([head] + tables)
 
 
 @jit
-def _span(cfx, cfy, rf, af, phf, ctx, cty, rt, at, pht, dir0):
+def _seat(cx, cy, r, cph, sph, G, table, n, j):
+    """Position of seat j (cos and sin of its angle phase + 2 pi j / n too) of a sprocket at
+    (cx, cy) with pitch radius r, cph and sph the cosine and sine of its phase; ``table`` the
+    offset of its cos/sin table in G."""
+    k = int(j) % n
+    c = cph * G[table + k] - sph * G[table + n + k]
+    s = sph * G[table + k] + cph * G[table + n + k]
+    return cx + r * c, cy + r * s, c, s
+
+
+@jit
+def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, spt, tt, nt, dir0,
+          G):
     """One straight span between two sprockets (scalar form of wrapping._span).
+
+    The endpoints are the fixed point of the window condition: seats j from a direction, the
+    direction from those seats, until the seats repeat (usually at the first check). Within
+    about _EDGE (seat units) before an event the tolerant window flips between two candidate
+    endpoints; after seven checks the strict window decides (as wrapping._span does).
 
     Returns (length, arm_from, arm_to, j_from, j_to, u_from, u_to, ang_from, ang_to, direction),
     u the un-floored seat coordinates whose integer crossings are the release (from) and
     seating (to) events."""
-    d = dir0
-    jf_old = -1.0e300
-    jt_old = -1.0e300
-    jf = 0.0
-    jt = 0.0
-    angf = 0.0
-    angt = 0.0
     edge = _EDGE
-    for it in range(16):
-        if it == 8:
-            # Within about _EDGE (seat units) before an event the tolerant window flips between
-            # the two candidate endpoints; the strict window settles there (as wrapping._span).
+    d = dir0
+    jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
+    jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+    ax = ay = bx = by = cf = sf = ct = st = 0.0
+    settled = False
+    for it in range(14):
+        if it == 7:
             edge = 0.0
-            d = dir0
-            jf_old = -1.0e300
-            jt_old = -1.0e300
-        jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
-        jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
-        angf = phf + 2.0 * af * jf
-        angt = pht + 2.0 * at * jt
-        ax = cfx + rf * math.cos(angf)
-        ay = cfy + rf * math.sin(angf)
-        bx = ctx + rt * math.cos(angt)
-        by = cty + rt * math.sin(angt)
+            jf = math.floor((dir0 + _HALF_PI + af - phf) / (2.0 * af))
+            jt = math.floor((dir0 + _HALF_PI + at - pht) / (2.0 * at))
+        ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
+        bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        nd = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
-        if jf == jf_old and jt == jt_old:
-            d = nd
+        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        jf2 = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
+        jt2 = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+        if jf2 == jf and jt2 == jt:
+            settled = True
             break
-        jf_old = jf
-        jt_old = jt
-        d = nd
-    ax = cfx + rf * math.cos(angf)
-    ay = cfy + rf * math.sin(angf)
-    bx = ctx + rt * math.cos(angt)
-    by = cty + rt * math.sin(angt)
-    length = math.hypot(bx - ax, by - ay)
+        jf = jf2
+        jt = jt2
+    if not settled:
+        ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
+        bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
+        nd = math.atan2(by - ay, bx - ax)
+        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+    dx = bx - ax
+    dy = by - ay
+    length = math.hypot(dx, dy)
+    # arms r sin(angle - direction), the direction's cosine and sine from the span vector
+    cd = dx / length
+    sd = dy / length
     uf = (d + _HALF_PI + af - phf) / (2.0 * af)
     ut = (d + _HALF_PI + at - pht) / (2.0 * at)
-    return (length, rf * math.sin(angf - d), rt * math.sin(angt - d), jf, jt, uf, ut, angf,
-            angt, d)
+    return (length, rf * (sf * cd - cf * sd), rt * (st * cd - ct * sd), float(jf), float(jt), uf,
+            ut, phf + 2.0 * af * jf, pht + 2.0 * at * jt, d)
 
 
 @jit
@@ -142,12 +163,22 @@ def span_geometry(phi1, phi2, G):
     n_o = G[10]
     n_span = G[11]
     m_links = G[12]
+    nc = int(n_c)
+    no = int(n_o)
+    tc = G_SIZE                 # the driver's cos/sin table
+    to = G_SIZE + 2 * nc        # the driven sprocket's
     ph_c = th4s - phi1
     ph_o = th2s - phi2
-    (lu, aus, aue, jus, jue, uus, uue, gus, gue, du) = _span(0.0, 0.0, r_o, a_o, ph_o, xc, yc, r_c,
-                                                             a_c, ph_c, 0.0)
-    (ll, als, ale, jls, jle, uls, ule, gls, gle, dl) = _span(xc, yc, r_c, a_c, ph_c, 0.0, 0.0, r_o,
-                                                             a_o, ph_o, math.pi + 2.0 * th1)
+    cpc = math.cos(ph_c)
+    spc = math.sin(ph_c)
+    cpo = math.cos(ph_o)
+    spo = math.sin(ph_o)
+    (lu, aus, aue, jus, jue, uus, uue, gus, gue, du) = _span(0.0, 0.0, r_o, a_o, ph_o, cpo, spo, to,
+                                                             no, xc, yc, r_c, a_c, ph_c, cpc, spc,
+                                                             tc, nc, 0.0, G)
+    (ll, als, ale, jls, jle, uls, ule, gls, gle, dl) = _span(xc, yc, r_c, a_c, ph_c, cpc, spc, tc,
+                                                             nc, 0.0, 0.0, r_o, a_o, ph_o, cpo,
+                                                             spo, to, no, math.pi + 2.0 * th1, G)
     j_lc = jls - n_c * math.floor((jls - jue + n_c - 1.0) / n_c)
     j_lo = jle - n_o * math.floor((jle - jus - 1.0) / n_o)
     wrapped_c = jue - j_lc
