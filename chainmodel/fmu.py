@@ -202,7 +202,7 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
 
     try:   # metadata only: the chosen level's descriptions and static tension
         model = sc.model()
-        descriptions, static = model.output_descriptions(), model.static_tension()
+        descriptions, static = model.output_descriptions(), model.static_tension
     except Exception:
         descriptions = {n: by_name[n].description or "" for n in outputs}
         static = math.nan

@@ -504,9 +504,10 @@ class FixedStepper(Stepper):
         if logged > log.size:
             log = np.roll(log, -(logged % log.size))
         self._finish(res, float(times[-1]), log, None)
-        if out.shape[0]:
-            for i in range(1, times.size):
-                self._commit_outputs(float(times[i]), out[i])
+        if out.shape[0] and not np.isfinite(out[1:times.size]).all():
+            bad = ~np.isfinite(out[1:times.size]).all(axis=1)
+            i = 1 + int(np.argmax(bad))
+            self._commit_outputs(float(times[i]), out[i])    # raises, naming the outputs
         self.stats["wall_time"] += time.perf_counter() - wall
 
     def _finish(self, res, t_end, log, row) -> None:

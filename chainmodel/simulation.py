@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import math
 import sys
 import time as _time
 from pathlib import Path
@@ -11,7 +10,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .models import ALL_OUTPUTS, SimulationDiverged
+from .models import ALL_OUTPUTS, SimulationDiverged  # noqa: F401  (re-exported)
 from .parameters import FIDELITY_NAMES
 from .scene import Scene, load_scene
 
@@ -25,7 +24,7 @@ class Result:
 
     def __init__(self, scene: Scene, time: np.ndarray, data: dict[str, np.ndarray],
                  descriptions: dict[str, str], wall_time: float, stats: dict,
-                 static_tension: float, snapshots: list | None = None):
+                 static_tension, snapshots: list | None = None):
         self.scene = scene
         self.time = time
         self._data = data
@@ -33,8 +32,16 @@ class Result:
         self.units = dict(UNITS)
         self.wall_time = wall_time
         self.stats = stats
-        self.static_tension = static_tension
+        # a number, or a callable computed on first use (level 3 settles the chain for it)
+        self._static_tension = static_tension
         self.snapshots = snapshots or []
+
+    @property
+    def static_tension(self) -> float:
+        """Static span tension at rest with no load of this level [N] (Model.static_tension)."""
+        if callable(self._static_tension):
+            self._static_tension = float(self._static_tension())
+        return self._static_tension
 
     @property
     def fidelity(self) -> int:
@@ -153,7 +160,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         wall = _time.perf_counter() - wall
         return Result(scene, times, data, model.output_descriptions(), wall,
                       {"steps": 0, "rhs_evaluations": 0, "events": 0, "wall_time": wall},
-                      model.static_tension())
+                      model.static_tension)
     stepper = scene.stepper(model)
     data = {o.name: np.empty(len(times)) for o in ALL_OUTPUTS}
     snaps = []
@@ -163,7 +170,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         wall = _time.perf_counter() - wall
         bar.close()
         return Result(scene, times, data, model.output_descriptions(), wall,
-                      dict(stepper.stats), model.static_tension(), snaps)
+                      dict(stepper.stats), model.static_tension, snaps)
     out = stepper.outputs()
     for i, t in enumerate(times):
         if i:
@@ -176,7 +183,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     wall = _time.perf_counter() - wall
     bar.close()
     return Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
-                  model.static_tension(), snaps)
+                  model.static_tension, snaps)
 
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..geometry import Drive
 from ..kinematics import driven_rotation
-from ..kinematics.wrapping import chain_geometry, tooth_period_samples
+from ..kinematics.wrapping import chain_geometry, tooth_period_geometry
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, quasi_static_extras)
 
 __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stiffness",
@@ -74,9 +74,7 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     pre = params["chain.pretension"]
     if drive.links is None:
         return pre
-    phi1 = tooth_period_samples(drive, 100)
-    phi2 = driven_rotation(drive, phi1).driven_angle
-    g = chain_geometry(drive, phi1, phi2)
+    g = tooth_period_geometry(drive, 100)
     links = g.upper_links + g.lower_links
     stretch = (g.wrap_length - drive.links * drive.pitch) / links
     t0 = max(0.0, pre + params["chain.link_stiffness"] * float(np.mean(stretch)))

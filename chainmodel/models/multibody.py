@@ -46,6 +46,7 @@ from ..kinematics import fourbar as fb
 from ..kinematics.wrapping import chain_geometry, roller_positions
 from . import multibody_kernels as K
 from .base import Inputs, Model, SimulationDiverged
+from .spans import geometry_constants, span_geometry
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 
@@ -72,6 +73,10 @@ def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[floa
         return math.pi / 2, 0.0, 0.0
     gamma = seating_angle / 2 - math.pi / (4 * teeth)
     return gamma, math.pi / 2 - gamma, pitch * (0.5625 - 0.4 / teeth)
+
+
+#: settled static tensions per (drive, parameters): a scene's every run asks for the same one
+_STATIC_CACHE: dict = {}
 
 
 class MultibodyModel(Model):
@@ -171,9 +176,12 @@ class MultibodyModel(Model):
         d = self.drive
         phi2_k = float(driven_rotation(d, driver_angle).driven_angle)
 
+        G = geometry_constants(d)
+
         def unequal(phi2):
-            g = chain_geometry(d, np.array([driver_angle]), np.array([phi2]))
-            return float(g.upper.length[0] / g.upper_links[0] - g.lower.length[0] / g.lower_links[0])
+            # the scalar compiled twin of chain_geometry (levels 0-2's kernel)
+            g = span_geometry(float(driver_angle), float(phi2), G)
+            return g[0] / g[3] - g[9] / g[12]
 
         a_o = math.pi / d.n_driven
         f0 = unequal(phi2_k)
@@ -374,6 +382,14 @@ class MultibodyModel(Model):
 
     @cached_property
     def _static(self) -> tuple[float, float, float]:
+        key = (self.drive, tuple(sorted(self.params.items())), self.use_numba)
+        if key not in _STATIC_CACHE:
+            if len(_STATIC_CACHE) > 64:
+                _STATIC_CACHE.clear()
+            _STATIC_CACHE[key] = self._settle()
+        return _STATIC_CACHE[key]
+
+    def _settle(self) -> tuple[float, float, float]:
         relax = dict(self.params)
         m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
         relax["chain.link_damping"] = max(relax["chain.link_damping"], 0.25 * math.sqrt(k * m))

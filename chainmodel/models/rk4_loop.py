@@ -389,11 +389,14 @@ def _step_bound(w, h_event, cfg):
 
 
 @jit
-def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap):
+def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, started):
     """RK4 from (t0, x) to t1, in place on ``x``, with the step rule and guard of the module
     docstring; a step over which a switching function changes sign is redone across the change
     (:func:`_cross`). The first ``log_cap`` located event times go to
-    ``log[(log_at + k) % log.size]``. On return ``aux`` holds the evaluation at (t1, x).
+    ``log[(log_at + k) % log.size]``. ``started``: W[3], V[0] and aux already hold the
+    evaluation at (t0, x) with the step's inputs there (the previous step's last one), else it
+    is made here. On return ``aux`` holds the evaluation at (t1, x), f in W[3], the switching
+    functions in V[0].
 
     Returns (status, steps, events, rhs_evaluations, t, omega): status STATUS_OK, or
     STATUS_NONFINITE (stopped after the step that left a non-finite state, at time t) or
@@ -413,8 +416,9 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap):
     events = 0
     steps = 0
     t = t0
-    _switch(t, x, c, G, P, k1, aux, g0)
-    evals += 1
+    if not started:
+        _switch(t, x, c, G, P, k1, aux, g0)
+        evals += 1
     speed = max(abs(c[C_W0]), abs(c[C_W1]))
     h_event = Q[Q_EVENT_ANGLE] / speed if speed > 0.0 else math.inf
     fixed = cfg[CF_STEP] > 0.0
@@ -566,6 +570,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
     events = 0
     evals = 0
     logged = 0
+    started = False
     for i in range(1, times.size):
         t0 = times[i - 1]
         t1 = times[i]
@@ -579,8 +584,15 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         c[C_ACC1] = acc[i]
         c[C_L0] = load[i - 1]
         c[C_L1] = load[i]
+        if started:
+            # the evaluation that ended the last step was made at this point's own inputs;
+            # it starts this step if the interpolant starts from the same ones (held or
+            # constant acceleration): an evaluation is a pure function of (x, inputs)
+            th, ww, aa, ld = _inputs(t0, c)
+            started = (th == angle[i - 1] and ww == speed[i - 1] and aa == acc[i - 1]
+                       and ld == load[i - 1])
         status, m, e, v, t_st, w = _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, logged,
-                                            log_cap)
+                                            log_cap, started)
         total += m
         events += e
         evals += v
@@ -593,15 +605,26 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         if want_states:
             for j in range(n):
                 states[i, j] = x[j]
+        th, ww, aa, ld = _inputs(t1, c)
+        started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
         if want_out:
-            th, ww, aa, ld = _inputs(t1, c)
-            if not (th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]):
+            if not started:
                 # the point's inputs differ from the interpolant's end values (a change of
-                # acceleration, round-off of the load): evaluate at the point's own inputs
-                evaluate(x, angle[i], speed[i], acc[i], load[i], G, P, W[8], aux)
+                # acceleration, round-off of the load): evaluate at the point's own inputs,
+                # which also starts the next step
+                _switch_at(x, angle[i], speed[i], acc[i], load[i], G, P, W[3], aux, V[0])
                 evals += 1
+                started = True
             fill_outputs(x, aux, speed[i], P, Q, OUT[i])
     return times.size - 1, STATUS_OK, total, events, evals, logged, times[-1], 0.0
+
+
+@jit
+def _switch_at(x, th, w, acc, load, G, P, dx, aux, g):
+    """:func:`_switch` at given inputs."""
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
+    for i in range(6):
+        g[i] = aux[A_G_UP + i]
 
 
 @jit

@@ -41,8 +41,7 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from ..geometry import Drive
-from ..kinematics import driven_rotation
-from ..kinematics.wrapping import chain_geometry, tooth_period_samples
+from ..kinematics.wrapping import tooth_period_geometry
 from . import rk4_loop as L
 from . import spans as S
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model
@@ -94,8 +93,7 @@ class TorsionalModel(Model):
         """Tooth-period means of the level-0 configuration: link counts, span lengths and
         directions (used for the constant chain-inertia matrix and the modal basis)."""
         d = self.drive
-        phi1 = tooth_period_samples(d, 100)
-        g = chain_geometry(d, phi1, driven_rotation(d, phi1).driven_angle)
+        g = tooth_period_geometry(d, 100)
         return {"n_up": float(np.mean(g.upper_links)), "n_low": float(np.mean(g.lower_links)),
                 "n_up_min": float(np.min(g.upper_links)),
                 "n_low_min": float(np.min(g.lower_links)),
@@ -200,63 +198,27 @@ class TorsionalModel(Model):
     def initial_state(self, u: Inputs) -> np.ndarray:
         """Rest, in static equilibrium under the load torque ``u.torque`` with the input shaft
         held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
-        balances the span tensions, found by bracketing from the level-0 configuration."""
-        from scipy.optimize import brentq
-
-        modal = self._modal_initial(u)
+        balances the span tensions, found by bracketing from the level-0 configuration
+        (:func:`chainmodel.models.equilibrium.static_state`, one compiled call)."""
+        from . import equilibrium as E
+        from .kinematic_kernel import driven_rotation as scalar_rotation
+        from .kinematic_kernel import fourbar_constants
         d = self.drive
-        a_o, a_c = math.pi / d.n_driven, math.pi / d.n_driver
-        phi2_kin = float(driven_rotation(d, u.angle).driven_angle)
-
-        def state(phi1, phi2):
-            if self.rigid:
-                return np.concatenate([[phi2, 0.0], modal])
-            return np.concatenate([[phi1, phi2, 0.0, 0.0], modal])
-
-        def acc2(phi1, phi2):
-            aux = self._kernel(state(phi1, phi2), phi1, 0.0, 0.0, u.torque)[1]
-            return aux[S.A_ACC2] if self.rigid else self._driven_torque(state(phi1, phi2), u)
-
-        def solve_driven(phi1):
-            centre = phi2_kin + (phi1 - u.angle) * d.tooth_ratio
-            lo, hi = centre - 0.5 * a_o, centre + 0.5 * a_o
-            flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
-            for _ in range(20):
-                if flo >= 0 >= fhi:
-                    break
-                lo, hi = lo - a_o, hi + a_o
-                flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
-            else:
-                raise ValueError("no static equilibrium of the driven sprocket under "
-                                 f"load.torque = {u.torque:g} N.m")
-            if flo == 0.0:
-                return lo
-            if fhi == 0.0:
-                return hi
-            return brentq(lambda v: acc2(phi1, v), lo, hi, xtol=1e-15, rtol=1e-15)
-
-        if self.rigid:
-            return state(u.angle, solve_driven(u.angle))
-
-        k_s = self.params["input_shaft.stiffness"]
-
-        def shaft_residual(phi1):
-            phi2 = solve_driven(phi1)
-            x = state(phi1, phi2)
-            aux = self._kernel(x, u.angle, 0.0, 0.0, u.torque)[1]
-            return aux[S.A_ACC1]
-
-        lo, hi = u.angle - 0.5 * a_c, u.angle + 0.5 * a_c
-        for _ in range(20):
-            flo, fhi = shaft_residual(lo), shaft_residual(hi)
-            if flo >= 0 >= fhi:
-                break
-            lo, hi = lo - a_c, hi + a_c
-        else:  # pragma: no cover - the shaft spring always brackets
-            raise ValueError(f"no static equilibrium of the driver on input_shaft.stiffness "
-                             f"= {k_s:g} N.m/rad")
-        phi1 = brentq(shaft_residual, lo, hi, xtol=1e-15, rtol=1e-15)
-        return state(phi1, solve_driven(phi1))
+        modal = self._modal_initial(u)
+        x = np.concatenate([np.zeros(self.n_sprocket_states), modal])
+        K = self.__dict__.get("_fourbar_constants")
+        if K is None:
+            K = self.__dict__["_fourbar_constants"] = fourbar_constants(d)
+        phi2_kin = scalar_rotation(float(u.angle), 0.0, 0.0, False, K)[0]
+        status = E.static_state(float(u.angle), float(u.torque), phi2_kin, d.tooth_ratio,
+                                math.pi / d.n_driven, math.pi / d.n_driver, x, self.G, self.P)
+        if status == E.STATUS_NO_DRIVEN:
+            raise ValueError("no static equilibrium of the driven sprocket under "
+                             f"load.torque = {u.torque:g} N.m")
+        if status == E.STATUS_NO_DRIVER:  # pragma: no cover - the shaft spring always brackets
+            raise ValueError("no static equilibrium of the driver on input_shaft.stiffness "
+                             f"= {self.params['input_shaft.stiffness']:g} N.m/rad")
+        return x
 
     def _driven_torque(self, x, u):
         """Net static torque on the driven sprocket (flexible shaft, driver held)."""
