@@ -61,6 +61,10 @@ OUTPUT_NAMES: tuple[str, ...] = tuple(o.name for o in ALL_OUTPUTS)
 DEFAULT_TOLERANCE = 5e-4
 #: event times a compiled communication step keeps for the event log
 EVENTS_PER_STEP = 16
+#: status codes of the compiled loops (models/rk4_loop.py, multibody_kernels.py): 1 diverged,
+#: 2 explicit step above the stable limit, 3 the model's range left, 4 non-finite outputs
+STATUS_UNSTABLE = 2
+STATUS_OUTPUTS = 4
 
 
 @dataclass
@@ -190,7 +194,8 @@ class Stepper(ABC):
         model's sentence (:meth:`Model.input_error`) when they are not acceptable. Arrays (a
         batch of communication points) are checked at their non-finite, largest-speed and
         largest-torque points."""
-        if np.ndim(angle) or np.ndim(speed) or np.ndim(torque):
+        if (isinstance(angle, np.ndarray) or isinstance(speed, np.ndarray)
+                or isinstance(torque, np.ndarray)):
             angle, speed, torque = (np.asarray(v, float) for v in (angle, speed, torque))
             bad = ~(np.isfinite(angle) & np.isfinite(speed) & np.isfinite(torque))
             picks = ([int(np.argmax(bad))] if bad.any() else []) + [
@@ -219,8 +224,8 @@ class Stepper(ABC):
         self.refuse_bad_inputs(angle, speed, torque)
         a1 = angle + speed * (t_end - self.t)
         row = self._row
-        model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row)
-        self._commit_outputs(t_end, row)
+        if model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row) is not True:
+            self._commit_outputs(t_end, row)     # (a compiled output function says True)
         self.t = t_end
         self._set_held(a1, speed, torque, acceleration)
         return row
@@ -421,32 +426,36 @@ class FixedStepper(Stepper):
     compiled: bool = True
 
     def _has_compiled(self) -> bool:
-        return (self.compiled and self.model.n_states > 0
-                and self.method in getattr(self.model, "compiled_methods", ())
-                and self.model._compiled(self.method))
+        can = self.__dict__.get("_can_compile")
+        if can is None:     # what the model offers for this method (fixed once built)
+            model = self.model
+            can = self._can_compile = (model.n_states > 0
+                                       and self.method in getattr(model, "compiled_methods", ())
+                                       and model._compiled(self.method))
+        return self.compiled and can
 
     # --- compiled paths ---------------------------------------------------------------------
     def _advance_held(self, t_end, angle, speed, acceleration, torque):
-        if not self.model.n_states:
-            return super()._advance_held(t_end, angle, speed, acceleration, torque)
         if not self._has_compiled():
-            return None
+            if self.model.n_states:
+                return None
+            return super()._advance_held(t_end, angle, speed, acceleration, torque)
         self.refuse_bad_inputs(angle, speed, torque)
-        if t_end <= self.t:
+        t0 = self.t
+        a1 = angle + speed * (t_end - t0)
+        if t_end <= t0:
             row = self._row
-            a = angle + speed * (t_end - self.t)
-            self.model.outputs_into(t_end, self.x, a, speed, acceleration, torque, row)
+            self.model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row)
             self._commit_outputs(t_end, row)
             self.t = t_end
-            self._set_held(a, speed, torque, acceleration)
+            self._set_held(a1, speed, torque, acceleration)
             return row
         wall = time.perf_counter()
         out = self._out
-        a1 = angle + speed * (t_end - self.t)
-        res = self.model.advance_held(self.method, self.x, self._spare, self.t, t_end,
-                                      float(angle), float(speed), float(acceleration),
-                                      float(torque), self.cfg, out, self._log)
-        self._finish(res, t_end, self._log, out[1])
+        res = self.model.advance_held(self.method, self.x, self._spare, t0, t_end, float(angle),
+                                      float(speed), float(acceleration), float(torque),
+                                      self.cfg, out, self._log)
+        self._finish(res, t_end, self._log, out)
         self.stats["wall_time"] += time.perf_counter() - wall
         self._set_held(a1, speed, torque, acceleration)
         return out[1]
@@ -503,31 +512,27 @@ class FixedStepper(Stepper):
         reached, status, steps, events, evals, logged = res[:6]
         if logged > log.size:
             log = np.roll(log, -(logged % log.size))
-        self._finish(res, float(times[-1]), log, None)
-        if out.shape[0] and not np.isfinite(out[1:times.size]).all():
-            bad = ~np.isfinite(out[1:times.size]).all(axis=1)
-            i = 1 + int(np.argmax(bad))
-            self._commit_outputs(float(times[i]), out[i])    # raises, naming the outputs
+        self._finish(res, float(times[-1]), log, out)
         self.stats["wall_time"] += time.perf_counter() - wall
 
-    def _finish(self, res, t_end, log, row) -> None:
+    def _finish(self, res, t_end, log, out) -> None:
         """Book a compiled call's result: on success commit the new state (swap the buffers);
-        otherwise raise the model's message and keep the old state."""
+        otherwise raise the model's message and keep the old state. ``out``: the outputs
+        array of the call (rows from 1), named in the message when they are not finite."""
         reached, status, steps, events, evals, logged, t_status, omega = res
-        self.stats["steps"] += int(steps)
-        self.stats["events"] += int(events)
-        self.stats["rhs_evaluations"] += int(evals)
+        self.stats["steps"] += steps
+        self.stats["events"] += events
+        self.stats["rhs_evaluations"] += evals
         if status:
+            if status == STATUS_OUTPUTS:
+                self._commit_outputs(t_status, out[reached + 1])      # raises, naming them
             self._raise(int(status), float(t_status), float(omega), self._spare)
         if logged:
             self.event_log.extend(log[:min(int(logged), log.size)].tolist())
-        if row is not None:
-            self._commit_outputs(t_end, row)
         self.x, self._spare = self._spare, self.x
         self.t = t_end
 
     def _raise(self, status, t, omega, x):
-        from .models.rk4_loop import STATUS_UNSTABLE
         if status == STATUS_UNSTABLE:
             raise SimulationDiverged(self._unstable_text(self.fixed_step, omega, t))
         self.model.check(t, x)   # the model's own sentence (non-finite state, amplitude, ...)

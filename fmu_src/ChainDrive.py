@@ -183,6 +183,7 @@ class ChainDrive(Fmi2Slave):
         self._output_vrs = frozenset(vr for vr, _ in self._output_map)
         self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
         self._in_angle, self._in_speed, self._in_torque = self._input_vrs
+        self._input_set = frozenset(self._input_vrs)
 
         # simulation state
         self._t0 = 0.0
@@ -253,7 +254,7 @@ class ChainDrive(Fmi2Slave):
 
     def set_real(self, vrs, values):
         # hot path: the three inputs, every step
-        real, inputs = self._real, self._input_vrs
+        real, inputs = self._real, self._input_set
         for vr, value in zip(vrs, values):
             if vr in inputs:
                 real[vr] = value

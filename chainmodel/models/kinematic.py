@@ -32,6 +32,7 @@ from ..geometry import Drive
 from ..kinematics import driven_rotation
 from ..kinematics.wrapping import chain_geometry, tooth_period_geometry
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, quasi_static_extras)
+from .kinematic_kernel import level0_outputs
 
 __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stiffness",
            "seat_series_compliance"]
@@ -190,10 +191,10 @@ class KinematicModel(Model):
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
         """Every output (ALL_OUTPUTS order) into ``out``: the scalar compiled twin of
-        :meth:`evaluate` (:func:`.kinematic_kernel.level0_outputs`), one call."""
-        from .kinematic_kernel import level0_outputs
+        :meth:`evaluate` (:func:`.kinematic_kernel.level0_outputs`), one call; True when all
+        are finite."""
         K, G, C = self._kernel_constants
-        level0_outputs(float(angle), float(speed), float(acceleration), float(torque), K, G, C,
+        return level0_outputs(float(angle), float(speed), float(acceleration), float(torque), K, G, C,
                        out)
 
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:

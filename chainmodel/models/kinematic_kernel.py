@@ -127,7 +127,8 @@ def driven_rotation(phi, w, a, reverse, K):
 @jit
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
-    acc) and the load torque; the tight span is the lower one when the speed is negative."""
+    acc) and the load torque into ``out``; the tight span is the lower one when the speed is
+    negative. True when every output is finite."""
     rev = speed < 0.0
     phi2, w2, a2, ratio, length = driven_rotation(angle, speed, acc, rev, K)
     g = span_geometry(angle, phi2, G)
@@ -174,3 +175,7 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
         out[11] = -(length / 2)
     out[12] = max(tight, slack)
     out[13] = tight
+    for k in range(14):
+        if not math.isfinite(out[k]):
+            return False
+    return True

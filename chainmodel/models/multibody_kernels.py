@@ -592,7 +592,8 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
     Returns (reached, status, steps, events, evaluations, logged, t_status, omega) as
     chainmodel.models.rk4_loop.advance_points: status 0 fine, 1 diverged (a link outside
     [l_min, l_max] or non-finite forces, after the step ending at t_status), 2 an explicit step
-    above the stable limit of the state at t_status (omega its frequency bound)."""
+    above the stable limit of the state at t_status (omega its frequency bound), 4 a
+    non-finite output at t_status (its row filled)."""
     n = x_in.shape[0]
     nq = n // 2
     x = x_out
@@ -633,6 +634,9 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
             _OUT(x, angle[i], speed[i], acc[i], load[i], P, acc1, tension, fcon, side, dist,
                  seat_angle, scr, mids, tol, speed[i] < 0.0, tooth_ratio, spans, OUT[i])
             evals += 1
+            for k in range(OUT.shape[1]):
+                if not math.isfinite(OUT[i, k]):
+                    return i - 1, 4, steps, 0, evals, 0, times[i], 0.0
     return times.shape[0] - 1, 0, steps, 0, evals, 0, times[-1], 0.0
 
 

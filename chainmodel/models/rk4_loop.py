@@ -70,6 +70,7 @@ STATUS_OK = 0
 STATUS_NONFINITE = 1     # a state became non-finite
 STATUS_UNSTABLE = 2      # the explicit step is above the stable limit of the current state
 STATUS_AMPLITUDE = 3     # a span mode's amplitude left the string model's range (level 2)
+STATUS_OUTPUTS = 4       # an output is not finite (its row is filled, for the message)
 
 W_ROWS = 14     # work vectors of the state's size (see _interval)
 V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi, ga, gb
@@ -512,10 +513,20 @@ def fill_outputs(x, aux, w_in, P, Q, out):
 
 
 @jit
+def _finite(v):
+    for k in range(v.size):
+        if not math.isfinite(v[k]):
+            return False
+    return True
+
+
+@jit
 def outputs_into(x, th, w, acc, load, G, P, Q, dx, aux, out):
-    """Every output at (x, inputs) into ``out`` (one kernel evaluation)."""
+    """Every output at (x, inputs) into ``out`` (one kernel evaluation); True when all are
+    finite."""
     evaluate(x, th, w, acc, load, G, P, dx, aux)
     fill_outputs(x, aux, w, P, Q, out)
+    return _finite(out)
 
 
 @jit
@@ -616,6 +627,8 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
                 evals += 1
                 started = True
             fill_outputs(x, aux, speed[i], P, Q, OUT[i])
+            if not _finite(OUT[i]):
+                return i - 1, STATUS_OUTPUTS, total, events, evals, logged, t1, 0.0
     return times.size - 1, STATUS_OK, total, events, evals, logged, times[-1], 0.0
 
 

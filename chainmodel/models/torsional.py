@@ -346,8 +346,9 @@ class TorsionalModel(Model):
         return dict(zip(OUTPUT_NAMES, out.tolist()))
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
-        """Every output (ALL_OUTPUTS order) into ``out``, one compiled call."""
-        L.outputs_into(x, float(angle), float(speed), float(acceleration), float(torque), self.G,
+        """Every output (ALL_OUTPUTS order) into ``out``, one compiled call; True when all are
+        finite."""
+        return L.outputs_into(x, float(angle), float(speed), float(acceleration), float(torque), self.G,
                        self.P, self.loop_constants, self._dx_row, self._aux_row, out)
 
     def outputs_many(self, times, states, angle, speed, acceleration, torque
