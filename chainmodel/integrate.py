@@ -246,8 +246,8 @@ class Stepper(ABC):
         On failure the stepper keeps its time, state and inputs (the integration builds new
         arrays and assigns them at the end)."""
         source = self._source(inputs)
-        u0 = source(self.t)
-        self.refuse_bad_inputs(u0.angle, u0.speed, u0.torque)
+        for u0 in (source(self.t), source(t_end)):
+            self.refuse_bad_inputs(u0.angle, u0.speed, u0.torque)
         saved = self.t, self.x, self._inputs, getattr(self, "_held", None), self._h_state()
         wall = time.perf_counter()
         try:

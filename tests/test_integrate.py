@@ -281,3 +281,34 @@ def test_make_stepper_names_valid_methods():
     with pytest.raises(ValueError, match="rk4"):
         make_stepper(Oscillator(), "euler")
     assert isinstance(make_stepper(Oscillator(), "verlet", step=1e-3), Verlet)
+
+
+# --- the input hook (Model.input_error) ---------------------------------------------------------
+
+class Picky(HeldInput):
+    """Refuses input speeds above 5 rad/s, as a model with a speed limit would."""
+
+    def input_error(self, angle, speed, torque):
+        if abs(speed) > 5.0:
+            return f"input input_shaft.speed = {speed:g} rad/s is above this model's 5 rad/s"
+        return super().input_error(angle, speed, torque)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_non_finite_inputs_are_refused_before_the_step_naming_them(bad):
+    for s in (RK4(HeldInput(), step=0.01), Adaptive(HeldInput(), method="rk45")):
+        s.advance(0.1, Inputs(0.0, 1.0, 0.0))
+        before = (s.t, s.x.copy())
+        with pytest.raises(ValueError, match="load.torque"):
+            s.advance(0.2, Inputs(0.0, 1.0, bad))
+        assert s.t == before[0] and np.array_equal(s.x, before[1])
+
+
+def test_the_models_input_hook_is_asked_before_every_step():
+    s = RK4(Picky(), step=0.01)
+    s.advance(0.1, Inputs(0.0, 4.0, 0.0))
+    with pytest.raises(ValueError, match="above this model's 5 rad/s"):
+        s.advance(0.2, Inputs(0.0, 6.0, 0.0))
+    with pytest.raises(ValueError, match="above this model's 5 rad/s"):
+        s.advance(0.2, lambda t: Inputs(0.0, 60.0 * t, 0.0))        # a source, at its end
+    assert s.t == 0.1

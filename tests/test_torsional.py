@@ -369,3 +369,29 @@ def test_automatic_step_is_capped_at_a_quarter_tooth_period_of_the_current_input
     assert np.max(np.abs(r["driven.angle"][late] - ref["driven.angle"][late])) < 1e-4
     # an explicit solver.step is the user's choice and is kept
     assert sc.with_overrides(solver_step=2 * quarter).stepper().h == pytest.approx(2 * quarter)
+
+@pytest.mark.parametrize("name, level, load", [("xu2010", 1, 43.2), ("xu2010", 2, -20.0),
+                                               ("C1", 1, 100.0), ("C1", 2, 0.0)])
+def test_compiled_static_equilibrium_is_at_rest_and_equals_its_twin(name, level, load):
+    """The initial state (models/equilibrium.py, one compiled call) is an equilibrium - every
+    acceleration of the model's own right-hand side vanishes to round-off relative to the
+    accelerations one degree of rotation away would cause - and the plain-Python twin of the
+    same functions finds the same state."""
+    from chainmodel.models import equilibrium as E
+    from chainmodel.models.kinematic_kernel import driven_rotation, fourbar_constants
+    m = chainmodel.Scene.from_preset(name, fidelity=level).model()
+    u = Inputs(0.37, 0.0, load)
+    x = m.initial_state(u)
+    k = m.n_sprocket_states // 2
+    acc = m.rhs(0.0, x, u)[k:m.n_sprocket_states]
+    nudged = x.copy()
+    nudged[k - 1] += math.radians(1.0)                  # driven sprocket turned by a degree
+    scale = np.max(np.abs(m.rhs(0.0, nudged, u)[k:m.n_sprocket_states]))
+    assert np.max(np.abs(acc)) < 1e-9 * scale
+    twin = np.concatenate([np.zeros(m.n_sprocket_states), x[m.n_sprocket_states:]])
+    phi2_kin = driven_rotation(0.37, 0.0, 0.0, False, fourbar_constants(m.drive))[0]
+    d = m.drive
+    status = E.static_state.py_func(0.37, load, phi2_kin, d.tooth_ratio, math.pi / d.n_driven,
+                                    math.pi / d.n_driver, twin, m.G, m.P)
+    assert status == E.STATUS_OK
+    np.testing.assert_allclose(twin, x, rtol=0, atol=1e-14)
