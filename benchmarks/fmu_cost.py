@@ -3,18 +3,23 @@
     python benchmarks/fmu_cost.py                  # build both FMUs in a temp dir, measure, print
     python benchmarks/fmu_cost.py --write-doc      # ... and rewrite "## FMU" in docs/performance.md
 
-Both FMUs are driven by the same master loop through fmpy's low-level API, interleaved in the
-same run: per step set the three inputs, fmi2DoStep, get the fourteen outputs. The bare FMU
-(benchmarks/bare_fmu/BareFmu.py, same inputs and outputs, does nothing) is the floor every
-pythonfmu FMU pays; the library's level-0 model evaluated for the same inputs is the physics
-cost. ChainDrive minus both, paired block by block, is the adapter's overhead. Built FMUs go to a temporary directory
-(nothing is committed).
+Both FMUs are driven by the same master loop through fmpy's low-level API, interleaved block by
+block in the same run: per step set the three inputs, fmi2DoStep, get the fourteen outputs. The
+bare FMU (benchmarks/bare_fmu/BareFmu.py, same inputs and outputs, does nothing) is the floor
+every pythonfmu FMU pays. For every fidelity level the table gives the ChainDrive FMU, the
+floor, their ratio, and the library's own cost per output point (``simulate()`` of the same
+scene and grid, whole call, divided by its points), plus the adapter's own Python measured
+in-process without FMI. Targets (issue 8): levels 0-2 within 2x the floor; level 3 within the
+floor + 1.3x the library's cost per output. Built FMUs go to a temporary directory (nothing is
+committed).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import math
+import os
 import platform
 import statistics
 import subprocess
@@ -91,90 +96,102 @@ class _Master:
         self.fmu.freeInstance()
 
 
-def adapter_cost(steps: int = 20000) -> float:
-    """Seconds per step of the adapter's own Python (fmu_src/ChainDrive.py) at level 0, called
-    in-process without FMI, with the model's output evaluation replaced by a constant: what the
-    FMU adds besides the pythonfmu floor and the physics."""
+def _adapter(tmp: str):
+    """The adapter (fmu_src/ChainDrive.py) in-process, with a copy of the package as its vendored
+    chainmodel (a copy, not a link: numba caches compiled kernels beside their source file, and
+    a link would leave entries for the adapter's private module name in the worktree)."""
     import importlib.util
+    import shutil
+    vendor = Path(tmp) / "_vendor"
+    vendor.mkdir()
+    shutil.copytree(ROOT / "chainmodel", vendor / "chainmodel",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    spec = importlib.util.spec_from_file_location("_bench_adapter",
+                                                  ROOT / "fmu_src" / "ChainDrive.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.ChainDrive(instance_name="bench", resources=tmp)
+
+
+def adapter_cost(level: int, parameters: dict, table: np.ndarray, h: float) -> float:
+    """Seconds per step of the adapter called in-process without FMI (set inputs, do_step, get
+    outputs): what the FMU costs besides the pythonfmu floor."""
     with tempfile.TemporaryDirectory(prefix="fmu_adapter_") as tmp:
-        vendor = Path(tmp) / "_vendor"
-        vendor.mkdir()
-        (vendor / "chainmodel").symlink_to(ROOT / "chainmodel", target_is_directory=True)
-        spec = importlib.util.spec_from_file_location("_bench_adapter",
-                                                      ROOT / "fmu_src" / "ChainDrive.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        slave = mod.ChainDrive(instance_name="bench", resources=tmp)
+        slave = _adapter(tmp)
         vr = {v.name: k for k, v in slave.vars.items()}
         in_vr = [vr[n] for n in INPUTS]
         out_vr = [k for k, v in slave.vars.items() if v.causality.name == "output"]
         slave.setup_experiment(0.0)
-        slave.set_real(in_vr, [0.0, 10.0, 20.0])
+        for name, value in parameters.items():
+            {float: slave.set_real, int: slave.set_integer, bool: slave.set_boolean,
+             str: slave.set_string}[type(value)]([vr[name]], [value])
+        slave.set_real(in_vr, list(table[0]))
         slave.exit_initialization_mode()
-        model = slave._stepper.model
-        fixed = model.outputs(0.0, slave._stepper.x, slave._stepper.inputs)
-        model.outputs = lambda t, x, u: fixed
-        h, t = 1e-4, 0.0
-        rows = [[10.0 * k * h, 10.0, 20.0] for k in range(steps)]
+        rows = table[1:].tolist()
+        t, best = 0.0, math.inf
+        for block in range(0, len(rows), 500):
+            wall = time.perf_counter()
+            for row in rows[block:block + 500]:
+                slave.set_real(in_vr, row)
+                slave.do_step(t, h)
+                t += h
+                slave.get_real(out_vr)
+            best = min(best, (time.perf_counter() - wall) / len(rows[block:block + 500]))
+        return best
+
+
+def library_cost(scene, points: int, h: float, repeats: int = 3) -> float:
+    """Seconds per output point of the library's whole simulate() call (run_scene) on the same
+    scene and grid (best of ``repeats``, after a warm-up)."""
+    from chainmodel.simulation import run_scene
+    sc = scene.with_overrides(duration=points * h, output_interval=h)
+    run_scene(sc.with_overrides(duration=10 * h))
+    best = math.inf
+    for _ in range(repeats):
         wall = time.perf_counter()
-        for row in rows:
-            slave.set_real(in_vr, row)
-            slave.do_step(t, h)
-            t += h
-            slave.get_real(out_vr)
-        return (time.perf_counter() - wall) / steps
+        run_scene(sc)
+        best = min(best, time.perf_counter() - wall)
+    return best / points
 
 
-def fmu_step_cost(steps: int = 200, repeats: int = 25, h: float = 1e-4,
+def fmu_step_cost(steps: int = 200, repeats: int = 15, h: float = 1e-4, levels=(0, 1, 2, 3),
                   chaindrive: str | Path | None = None, bare: str | Path | None = None) -> dict:
-    """Cost per communication step [s] of the level-0 ChainDrive FMU and of the bare FMU,
-    through fmpy, measured interleaved in one run (median over ``repeats`` blocks of ``steps``),
-    plus the library's level-0 evaluation for the same inputs. Builds the FMUs not given."""
-    from chainmodel.models import Inputs
+    """Per level: cost per communication step [s] of the ChainDrive FMU and of the bare FMU
+    through fmpy, interleaved (medians over ``repeats`` blocks of ``steps``), the library's
+    cost per output and the adapter's own. Builds the FMUs not given. Scene: xu2010 (seed 003:
+    ramp to 120 rpm in 0.05 s, 43.2 N.m), the blocks from t = 0."""
     from chainmodel.scene import Scene
-
-    scene = Scene.from_preset("xu2010", fidelity=0)    # seed 003 drive, ramp to 120 rpm
     n = steps * repeats + 1
-    u = [scene.inputs(k * h) for k in range(n)]
-    table = np.array([[v.angle, v.speed, v.torque] for v in u])
+    results = {}
     with tempfile.TemporaryDirectory(prefix="fmu_cost_") as tmp:
         chaindrive = Path(chaindrive) if chaindrive else build_chaindrive_fmu(tmp)
         bare = Path(bare) if bare else build_bare_fmu(tmp)
-        cd = _Master(chaindrive, scene.parameters)
-        bf = _Master(bare)
-        cd.start(table[0])
-        bf.start(table[0])
-        cd.run(table[1:51], h)          # warm-up (first calls import and allocate)
-        bf.run(table[1:51], h)
-        cost_cd, cost_bare, cost_lib = [], [], []
-        stepper = scene.stepper()
-        for r in range(repeats):
-            block = table[1 + r * steps: 1 + (r + 1) * steps]
-            cost_bare.append(bf.run(block, h))
-            cost_cd.append(cd.run(block, h))
-            # the library alone: what the FMU evaluates per step at level 0 (no state to
-            # integrate): the model's outputs for the held inputs, acceleration estimated
+        for level in levels:
+            scene = Scene.from_preset("xu2010", fidelity=level)
+            u = [scene.inputs(k * h) for k in range(n)]
+            table = np.array([[v.angle, v.speed, v.torque] for v in u])
+            cd = _Master(chaindrive, scene.parameters)
+            bf = _Master(bare)
+            cd.start(table[0])
+            bf.start(table[0])
             wall = time.perf_counter()
-            t, x, outputs = stepper.t, stepper.x, stepper.model.outputs
-            prev = None
-            for a, w, tq in block.tolist():
-                acc = 0.0 if prev is None else (w - prev) / h
-                t += h
-                outputs(t, x, Inputs(a + w * h, w, tq, acc))
-                prev = w
-            cost_lib.append((time.perf_counter() - wall) / len(block))
-        cd.close()
-        bf.close()
-    med = statistics.median
-    # adapter overhead per block, paired (the three runs of a block are adjacent in time)
-    over = sorted(c - b - lib for c, b, lib in zip(cost_cd, cost_bare, cost_lib))
-    q = len(over) // 4
-    adapter = adapter_cost()
-    return {"chaindrive_level0_s": med(cost_cd), "bare_s": med(cost_bare),
-            "library_level0_s": med(cost_lib), "overhead_s": med(over),
-            "overhead_iqr_s": (over[q], over[-1 - q]), "adapter_s": adapter,
-            "steps": steps, "repeats": repeats, "h": h,
-            "all": {"chaindrive": cost_cd, "bare": cost_bare, "library": cost_lib}}
+            cd.run(table[1:2], h)       # the first step compiles the FMU's own kernels
+            first = time.perf_counter() - wall
+            cost_cd, cost_bare = [], []
+            for r in range(repeats):
+                block = table[1 + r * steps: 1 + (r + 1) * steps]
+                cost_bare.append(bf.run(block, h))
+                cost_cd.append(cd.run(block, h))
+            cd.close()
+            bf.close()
+            med = statistics.median
+            results[level] = {"chaindrive_s": med(cost_cd), "bare_s": med(cost_bare),
+                              "ratio": med(c / b for c, b in zip(cost_cd, cost_bare)),
+                              "library_s": library_cost(scene, n - 1, h),
+                              "adapter_s": adapter_cost(level, scene.parameters, table, h),
+                              "first_step_s": first,
+                              "all": {"chaindrive": cost_cd, "bare": cost_bare}}
+    return {"levels": results, "steps": steps, "repeats": repeats, "h": h}
 
 
 def machine() -> str:
@@ -190,42 +207,47 @@ def machine() -> str:
 
 def section(res: dict) -> str:
     def us(s):
-        return f"{s * 1e6:,.0f} µs"
+        return f"{s * 1e6:,.1f} µs"
 
-    def spread(key):
-        v = res["all"][key]
-        return f"{us(min(v))} - {us(max(v))}"
-
-    cd, bare, lib = res["chaindrive_level0_s"], res["bare_s"], res["library_level0_s"]
+    rows = []
+    for level, r in res["levels"].items():
+        if level < 3:
+            target = f"{2 * r['bare_s'] * 1e6:,.0f} µs (2x floor)"
+            met = r["chaindrive_s"] <= 2 * r["bare_s"]
+        else:
+            bound = r["bare_s"] + 1.3 * r["library_s"]
+            target = f"{bound * 1e6:,.0f} µs (floor + 1.3 x library)"
+            met = r["chaindrive_s"] <= bound
+        rows.append(f"| {level} | {us(r['chaindrive_s'])} | {us(r['bare_s'])} | "
+                    f"{r['ratio']:.2f} | {us(r['library_s'])} | {us(r['adapter_s'])} | "
+                    f"{target}: {'met' if met else 'NOT met'} |")
     import fmpy
     import pythonfmu
+    load = " ".join(f"{v:.2f}" for v in os.getloadavg())
     return f"""## FMU
 
-Cost per communication step of `ChainDrive.fmu` at fidelity 0 through fmpy's low-level API,
-next to a bare pythonfmu FMU with the same 3 inputs and 14 outputs that does nothing
-(`benchmarks/bare_fmu/BareFmu.py`), measured interleaved in the same run. Master loop per step:
-set the 3 inputs, `fmi2DoStep`, get the 14 outputs. Scene: xu2010 (seed 003 drive, ramp to
-120 rpm, 43.2 N.m), h = {res['h']:g} s, median of {res['repeats']} blocks of {res['steps']} steps.
+Cost per communication step of `ChainDrive.fmu` through fmpy's low-level API, next to a bare
+pythonfmu FMU with the same 3 inputs and 14 outputs that does nothing
+(`benchmarks/bare_fmu/BareFmu.py`), measured interleaved block by block in the same run. Master
+loop per step: set the 3 inputs, `fmi2DoStep`, get the 14 outputs. Scene: xu2010 (seed 003
+drive, ramp to 120 rpm, 43.2 N.m), h = {res['h']:g} s, median of {res['repeats']} blocks of
+{res['steps']} steps from t = 0. "library": the whole `simulate()` call on the same grid divided
+by its output points; "adapter": `fmu_src/ChainDrive.py` called in-process without FMI (best
+block of 500 steps).
 
-| what | per communication step (median) | range over blocks |
-|---|---:|---:|
-| bare pythonfmu FMU through fmpy (floor) | {us(bare)} | {spread("bare")} |
-| ChainDrive FMU, fidelity 0, through fmpy | {us(cd)} | {spread("chaindrive")} |
-| library alone: the level-0 model's outputs, same inputs | {us(lib)} | {spread("library")} |
-| adapter overhead: ChainDrive - bare - library, paired per block | {us(res["overhead_s"])} | {us(res["overhead_iqr_s"][0])} - {us(res["overhead_iqr_s"][1])} (IQR) |
-| adapter's own Python alone (in-process, model output stubbed) | {res["adapter_s"] * 1e6:.1f} µs | |
+| level | ChainDrive FMU | bare FMU (floor) | ratio (median per block) | library per output | adapter alone | target |
+|---|---:|---:|---:|---:|---:|---|
+{chr(10).join(rows)}
 
-At fidelity 0 the step is the kinematic evaluation (one scalar call of the vectorised exact
-kinematics): it is {lib / cd:.0%} of the FMU's step. The FMU adds the pythonfmu floor and its own
-plumbing, {res["adapter_s"] * 1e6:.0f} µs measured directly; the difference of the
-through-fmpy figures cannot resolve that on this shared machine (see its IQR). Levels 1-3 pay their
-integration on top of the same floor. With numba installed, the FMU's own copy of the level 1-3
-kernels is JIT-compiled at its first initialization in a process (seconds; `CHAINMODEL_NUMBA=0`
-skips it).
+One `fmi2DoStep` is one compiled call at every level (the step, its stable-step guard and the
+14 outputs into a buffer; `Stepper.advance_held`); the adapter copies the values. The rest of
+the FMU's cost is pythonfmu's own per-call path (the floor: ctypes, the C++ wrapper, the GIL,
+Python-side get/set), paid three times a step by this master.
 
 Command: `{COMMAND}`; machine: {machine()}; fmpy {fmpy.__version__}, pythonfmu
-{pythonfmu.__version__}; date {datetime.date.today().isoformat()}. Other jobs shared the
-machine; the interleaving keeps the comparison fair, the absolute figures are indicative.
+{pythonfmu.__version__}; load average {load} (2 cores shared with other jobs: the interleaving
+keeps the ratios fair, the absolute figures are indicative); date
+{datetime.date.today().isoformat()}.
 """
 
 
@@ -249,10 +271,11 @@ def write_section(text: str, doc: Path = DOC) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=200, help="steps per block")
-    ap.add_argument("--repeats", type=int, default=25, help="blocks, interleaved")
+    ap.add_argument("--repeats", type=int, default=15, help="blocks, interleaved")
+    ap.add_argument("--levels", type=int, nargs="*", default=[0, 1, 2, 3])
     ap.add_argument("--write-doc", action="store_true", help="rewrite '## FMU' in docs/performance.md")
     args = ap.parse_args(argv)
-    res = fmu_step_cost(args.steps, args.repeats)
+    res = fmu_step_cost(args.steps, args.repeats, levels=tuple(args.levels))
     text = section(res)
     print(text)
     if args.write_doc:

@@ -20,7 +20,12 @@ plain-Python RK4 and Verlet and the adaptive steppers.
 
 A last table splits the automatic-step runs' wall time into stepping and the rest.
 
+``--targets``: only the table of issue 8's targets - the whole ``simulate()`` call over 1 s at
+the scenes' default output interval (1e-4 s), levels 1 and 2, best of --repeat (level 1 >= 100x
+real time, level 2 >= 20x), with the stepping / rest split and the evaluations per point.
+
     python benchmarks/reduced.py [--duration 0.5] [--repeat 3] [--per-point] [--all]
+    python benchmarks/reduced.py --targets [--repeat 5]
 """
 
 from __future__ import annotations
@@ -70,6 +75,31 @@ def errors(r, ref, duration):
     return d_phi, d_t
 
 
+def targets(scenes, repeat):
+    """Whole 1 s simulate() calls at the default output interval (issue 8's targets), wall and
+    CPU time (the machine is shared: CPU time is what a dedicated core gives)."""
+    print(f"numba: {spans.NUMBA}; best of {repeat}; load average "
+          f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
+    print("| scene | level | x real time, wall | x real time, CPU | target | stepping [ms] | "
+          "rest [ms] | internal steps | evaluations per point |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name in scenes:
+        for level, goal in ((1, 100), (2, 20)):
+            sc = chainmodel.Scene.from_preset(name, fidelity=level, duration=1.0)
+            simulation.run_scene(sc.with_overrides(duration=0.01))          # warm-up
+            wall = cpu = stepping = np.inf
+            for _ in range(repeat):
+                w, c = time.perf_counter(), time.process_time()
+                r = simulation.run_scene(sc)
+                wall = min(wall, time.perf_counter() - w)
+                cpu = min(cpu, time.process_time() - c)
+                stepping = min(stepping, r.stats["wall_time"])
+            points = len(r.time) - 1
+            print(f"| {name} | {level} | {1 / wall:.0f} | {1 / cpu:.0f} | {goal} | "
+                  f"{stepping * 1e3:.1f} | {(wall - stepping) * 1e3:.1f} | {r.stats['steps']} | "
+                  f"{r.stats['rhs_evaluations'] / points:.2f} |", flush=True)
+
+
 def fmt(x):
     return f"{x:.2g}" if abs(x) < 10 else f"{x:.0f}" if abs(x) >= 100 else f"{x:.1f}"
 
@@ -83,7 +113,11 @@ def main(argv=None):
     ap.add_argument("--all", action="store_true",
                     help="also plain-Python RK4/Verlet and adaptive steppers (1 ms only)")
     ap.add_argument("--scenes", nargs="*", default=["xu2010", "C1"])
+    ap.add_argument("--targets", action="store_true",
+                    help="only the whole 1 s call at the default output interval")
     args = ap.parse_args(argv)
+    if args.targets:
+        return targets(args.scenes, args.repeat)
     dur = args.duration
     print(f"numba: {spans.NUMBA}; duration {dur} s; best of {args.repeat}; batched path: "
           f"{BATCHED}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
@@ -98,7 +132,7 @@ def main(argv=None):
             base = chainmodel.Scene.from_preset(name, fidelity=level, duration=dur,
                                                 output_interval=min(INTERVALS))
             model = base.model()
-            h_auto = 0.9 * integrate.stability_limit("rk4") * model.stable_step(None)
+            h_auto = base.stepper(model).h       # the automatic step's bound at the start
             h_ref = min(h_auto, min(INTERVALS)) / 8
             ref, _, _ = run(base, "rk4", step=h_ref)
             ref2, _, _ = run(base, "rk4", step=h_ref / 2)

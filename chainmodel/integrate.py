@@ -7,20 +7,33 @@ case) or a callable ``t -> Inputs`` (an analytic scene profile).
 
 Methods
 -------
-``rk4``     classic fixed-step Runge-Kutta, 4 evaluations a step, stable for h w_max < 2.78.
+``rk4``     classic fixed-step Runge-Kutta, 4 evaluations a step, stable for h w_max < 2.83.
 ``verlet``  fixed-step velocity Verlet for second-order models (state [q, v]): one evaluation a
             step, stable for h w_max < 2; velocity-dependent forces use the half-step velocity.
 ``rk45``, ``dop853``   adaptive explicit (scipy ``solve_ivp``).
 ``radau``, ``bdf``     adaptive implicit, with the model's Jacobian sparsity pattern.
 ``lsoda``   adaptive, switches between stiff and non-stiff.
 
-Fixed steps default to 90 % of the stable limit the model reports (:meth:`Model.stable_step`);
-a larger requested step is refused with the limit in the message. Every stepper stops on the
+Fixed steps (docs/numerics.md): the automatic step comes from the accuracy asked
+(``solver.tolerance``: the relative frequency error of the fastest mode), the highest natural
+frequency of the *current* state (:meth:`Model.omega_at`) and a quarter tooth period at the
+current input speed (:meth:`Model.event_step`), never from the communication step, which is only
+split into equal steps no longer than that; the bound is estimated again after every step and
+the rest of the communication step split again when it shrank (the stable-step guard). An
+explicit ``solver.step`` is used as given, and refused - at construction or when the state
+changes - when it is above the stability limit. Every stepper stops on the
 model's switching functions (a span going slack...): the fixed-step methods locate the first
 sign change in a step on its dense output and step across it (:meth:`FixedStepper._cross`),
 the adaptive ones use scipy events, so kinks are resolved rather than smeared. Every stepper
 checks the state after each communication step: a diverging integration raises
-:class:`SimulationDiverged`, it never returns NaN.
+:class:`SimulationDiverged`, it never returns NaN, and a step that fails leaves the stepper at its
+last communication point (no state copy is made for that: the new state is built beside the old
+one and committed on success).
+
+Levels 1-3 run the fixed-step loops compiled (numba), a communication step with its outputs in
+one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
+for many points, ``simulate()``'s path); ``FixedStepper.compiled = False`` or
+``CHAINMODEL_NUMBA=0`` selects the Python loops here, which implement the same rule.
 """
 
 from __future__ import annotations
@@ -34,12 +47,24 @@ from typing import Callable, ClassVar, Union
 
 import numpy as np
 
-from .models.base import Inputs, Model, SimulationDiverged
+from .models.base import ALL_OUTPUTS, Inputs, Model, SimulationDiverged
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
-           "make_stepper", "SimulationDiverged", "stability_limit"]
+           "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",
+           "OUTPUT_NAMES", "DEFAULT_TOLERANCE"]
 
 InputSource = Union[Inputs, Callable[[float], Inputs]]
+
+#: the outputs of ALL_OUTPUTS by position: the rows advance_held and advance_points fill
+OUTPUT_NAMES: tuple[str, ...] = tuple(o.name for o in ALL_OUTPUTS)
+#: default of solver.tolerance (chainmodel.parameters; docs/numerics.md)
+DEFAULT_TOLERANCE = 5e-4
+#: event times a compiled communication step keeps for the event log
+EVENTS_PER_STEP = 16
+#: status codes of the compiled loops (models/rk4_loop.py, multibody_kernels.py): 1 diverged,
+#: 2 explicit step above the stable limit, 3 the model's range left, 4 non-finite outputs
+STATUS_UNSTABLE = 2
+STATUS_OUTPUTS = 4
 
 
 @dataclass
@@ -72,43 +97,81 @@ class Stepper(ABC):
                       "wall_time": 0.0}
         #: times at which the last (up to 1000) switching events were located
         self.event_log: deque = deque(maxlen=1000)
+        self._row = np.empty(len(OUTPUT_NAMES))
+
+    # --- inputs: built lazily, so a compiled step need not make an Inputs object ------------
+    @property
+    def inputs(self) -> Inputs:
+        """The inputs at the current time (held ones after a step with held inputs)."""
+        u = self._inputs
+        if u is None:
+            angle, speed, torque, acc = self._held
+            u = self._inputs = Inputs(angle, speed, torque, acc)
+        return u
+
+    @inputs.setter
+    def inputs(self, u: Inputs) -> None:
+        self._inputs = u
+
+    def _set_held(self, angle, speed, torque, acceleration) -> None:
+        self._inputs = None
+        self._held = (angle, speed, torque, acceleration)
 
     # --- public -----------------------------------------------------------------------------
     def advance(self, t_end: float, inputs: InputSource | None = None) -> dict[str, float]:
         """Integrate from the current time to ``t_end`` and return the outputs there.
 
         ``inputs``: an Inputs held over the step (angle advancing at the held speed), or a
-        callable giving the inputs at any time; None keeps the last held inputs."""
-        if not math.isfinite(t_end) or t_end < self.t - 1e-12 * max(1.0, abs(self.t)):
-            raise ValueError(f"communication point t_end = {t_end!r} s is before the current "
-                             f"time {self.t!r} s")
-        source = self._source(inputs)
-        u = source(t_end)       # the model's input bounds (Model.input_error); a held input's
-        why = self.model.input_error(u.angle, u.speed, u.torque)   # speed and load are the
-        if why is not None:                                        # start's, its angle is last
-            raise ValueError(f"step to t = {t_end:.9g} s refused: {why}")
-        wall = time.perf_counter()
-        if self.model.n_states and t_end > self.t:
-            self._integrate(self.t, t_end, source)
-            self.model.check(t_end, self.x)
-        self.t = float(t_end)
-        u = source(self.t)
-        self.inputs = u
-        self.stats["wall_time"] += time.perf_counter() - wall
-        out = self.model.outputs(self.t, self.x, u)
-        bad = [k for k, v in out.items() if not math.isfinite(v)]
-        if bad:
-            raise SimulationDiverged(f"{self.model.name} model produced non-finite outputs "
-                                     f"{', '.join(bad[:5])} at t = {self.t:.6g} s")
-        return out
+        callable giving the inputs at any time; None keeps the last held inputs. A step that
+        fails (ValueError for refused inputs, SimulationDiverged) leaves the stepper as it was."""
+        t_end = self._check_time(t_end)
+        if inputs is None:
+            inputs = self.inputs
+        if isinstance(inputs, Inputs):
+            row = self._advance_held(t_end, inputs.angle, inputs.speed, inputs.acceleration,
+                                     inputs.torque)
+        else:
+            row = self._advance_source(t_end, inputs)
+        if row is not None:
+            return dict(zip(OUTPUT_NAMES, row.tolist()))
+        return self._advance_python(t_end, inputs)
+
+    def advance_held(self, t_end: float, angle: float, speed: float, acceleration: float,
+                     torque: float) -> np.ndarray:
+        """The FMU's step: integrate to ``t_end`` with the inputs held first-order from the
+        current time (angle advancing at ``speed``; speed, acceleration and torque held) and
+        return every output at ``t_end`` (ALL_OUTPUTS order; a buffer reused by the next call).
+        One compiled call where the model and method have one; the same numbers as
+        :meth:`advance` with ``Inputs(angle, speed, torque, acceleration)``."""
+        t_end = self._check_time(t_end)
+        row = self._advance_held(t_end, angle, speed, acceleration, torque)
+        if row is None:
+            out = self._advance_python(t_end, Inputs(angle, speed, torque, acceleration))
+            row = self._row
+            for k, name in enumerate(OUTPUT_NAMES):
+                row[k] = out[name]
+        return row
+
+    def outputs_held(self, angle: float, speed: float, acceleration: float, torque: float
+                     ) -> np.ndarray:
+        """Every output (ALL_OUTPUTS order) at the current state for the inputs given (the FMU's
+        direct feedthrough when a master sets inputs at a communication point); refused inputs
+        raise ValueError."""
+        self.refuse_bad_inputs(angle, speed, torque)
+        self.model.outputs_into(self.t, self.x, angle, speed, acceleration, torque, self._row)
+        return self._row
+
+    def advance_points(self, times, angle, speed, acceleration, torque, out) -> bool:
+        """Integrate through the communication points ``times`` (``times[0]`` the current time)
+        with the inputs given there as arrays, writing the outputs at times[i] into ``out[i]``
+        for i >= 1 (ALL_OUTPUTS order) - the numbers :meth:`advance` gives one point at a time
+        with a source that has these values, in one compiled call. False (nothing done) when
+        this stepper and model have no such path."""
+        return False
 
     def advance_batch(self, times, angle, speed, acceleration, torque) -> np.ndarray | None:
-        """Integrate through the communication points ``times`` (``times[0]`` the current time)
-        in one call, the inputs given there as arrays (the source's values: angle, speed,
-        acceleration, torque); the states at every point, as ``advance`` would leave them one
-        point at a time, or None when this stepper and model have no such path (then call
-        ``advance`` per point). Raises SimulationDiverged as ``advance`` does; outputs are the
-        caller's (e.g. the model's vectorised ``outputs_many``)."""
+        """Like :meth:`advance_points` but returning the states at every point (``states[0]``
+        the current one), or None when there is no compiled path."""
         return None
 
     def outputs(self) -> dict[str, float]:
@@ -126,7 +189,88 @@ class Stepper(ABC):
         self.t, self.x, self.inputs = float(state.t), x, state.inputs
         self._restore_h(state.h)
 
+    def refuse_bad_inputs(self, angle, speed, torque) -> None:
+        """The one place where inputs are checked before a step: raise ValueError with the
+        model's sentence (:meth:`Model.input_error`) when they are not acceptable. Arrays (a
+        batch of communication points) are checked at their non-finite, largest-speed and
+        largest-torque points."""
+        if (isinstance(angle, np.ndarray) or isinstance(speed, np.ndarray)
+                or isinstance(torque, np.ndarray)):
+            angle, speed, torque = (np.asarray(v, float) for v in (angle, speed, torque))
+            bad = ~(np.isfinite(angle) & np.isfinite(speed) & np.isfinite(torque))
+            picks = ([int(np.argmax(bad))] if bad.any() else []) + [
+                int(np.argmax(np.abs(speed))), int(np.argmax(np.abs(torque)))]
+            for k in picks:
+                self.refuse_bad_inputs(float(angle[k]), float(speed[k]), float(torque[k]))
+            return
+        error = self.model.input_error(angle, speed, torque)
+        if error is not None:
+            raise ValueError(error)
+
     # --- internals --------------------------------------------------------------------------
+    def _check_time(self, t_end) -> float:
+        t_end = float(t_end)
+        if not math.isfinite(t_end) or t_end < self.t - 1e-12 * max(1.0, abs(self.t)):
+            raise ValueError(f"communication point t_end = {t_end!r} s is before the current "
+                             f"time {self.t!r} s")
+        return t_end
+
+    def _advance_held(self, t_end, angle, speed, acceleration, torque) -> np.ndarray | None:
+        """Compiled path for held inputs: the outputs row, or None (use _advance_python)."""
+        model = self.model
+        if model.n_states:
+            return None
+        # stateless (level 0): the outputs of the held inputs at t_end
+        self.refuse_bad_inputs(angle, speed, torque)
+        a1 = angle + speed * (t_end - self.t)
+        row = self._row
+        if model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row) is not True:
+            self._commit_outputs(t_end, row)     # (a compiled output function says True)
+        self.t = t_end
+        self._set_held(a1, speed, torque, acceleration)
+        return row
+
+    def _advance_source(self, t_end, source) -> np.ndarray | None:
+        """Compiled path for a callable source: the outputs row, or None."""
+        return None
+
+    def _commit_outputs(self, t, row) -> None:
+        """Non-finite outputs are a divergence, never a result."""
+        if not np.all(np.isfinite(row)):
+            bad = [n for n, v in zip(OUTPUT_NAMES, row.tolist()) if not math.isfinite(v)]
+            raise SimulationDiverged(f"{self.model.name} model produced non-finite outputs "
+                                     f"{', '.join(bad[:5])} at t = {t:.6g} s")
+
+    def _advance_python(self, t_end, inputs) -> dict[str, float]:
+        """The model-interface path: integrate in Python (or scipy), outputs by Model.outputs.
+        On failure the stepper keeps its time, state and inputs (the integration builds new
+        arrays and assigns them at the end)."""
+        source = self._source(inputs)
+        for u0 in (source(self.t), source(t_end)):
+            self.refuse_bad_inputs(u0.angle, u0.speed, u0.torque)
+        saved = self.t, self.x, self._inputs, getattr(self, "_held", None), self._h_state()
+        wall = time.perf_counter()
+        try:
+            if self.model.n_states and t_end > self.t:
+                self._integrate(self.t, t_end, source)
+                self.model.check(t_end, self.x)
+            u = source(t_end)
+            out = self.model.outputs(t_end, self.x, u)
+            bad = [k for k, v in out.items() if not math.isfinite(v)]
+            if bad:
+                raise SimulationDiverged(f"{self.model.name} model produced non-finite outputs "
+                                         f"{', '.join(bad[:5])} at t = {t_end:.6g} s")
+        except BaseException:
+            self.t, self.x, self._inputs, held, h = saved
+            if held is not None:
+                self._held = held
+            self._restore_h(h)
+            raise
+        self.t = t_end
+        self.inputs = u
+        self.stats["wall_time"] += time.perf_counter() - wall
+        return out
+
     def _source(self, inputs: InputSource | None) -> Callable[[float], Inputs]:
         if inputs is None:
             inputs = self.inputs
@@ -154,7 +298,7 @@ class Stepper(ABC):
 # --- fixed step ------------------------------------------------------------------------------
 
 #: event crossing of the fixed-step methods (FixedStepper._cross; the compiled loop of levels 1-2
-#: uses the same values, models/spans.py): root tolerance on a dense output, and the gap eta
+#: uses the same values, models/rk4_loop.py): root tolerance on a dense output, and the gap eta
 #: between the steps on either side of an event, both relative to the step
 EVENT_TOL = 1e-5
 EVENT_GAP = 1e-4
@@ -193,95 +337,248 @@ def stability_limit(method: str) -> float:
     return {"rk4": 2.0 * math.sqrt(2.0), "verlet": 2.0}[method]
 
 
+def frequency_error(method: str, theta: float) -> float:
+    """Relative error of a fixed-step method's numerical frequency on x'' = -omega^2 x at
+    h omega = theta (docs/numerics.md): RK4 advances the phase by arg R(i theta) per step, R its
+    amplification factor 1 + z + z^2/2 + z^3/6 + z^4/24, so it lags by 1 - arg R / theta
+    (~ theta^4 / 120); velocity Verlet's frequency is 2 asin(theta / 2) / h, too high by
+    2 asin(theta / 2) / theta - 1 (~ theta^2 / 24)."""
+    if method == "rk4":
+        return 1.0 - math.atan2(theta - theta**3 / 6.0,
+                                1.0 - theta**2 / 2.0 + theta**4 / 24.0) / theta
+    if method == "verlet":
+        return 2.0 * math.asin(min(theta / 2.0, 1.0)) / theta - 1.0
+    raise ValueError(f"no accuracy rule for the {method!r} stepper")
+
+
+def accuracy_step(method: str, tolerance: float) -> float:
+    """h omega at which :func:`frequency_error` equals ``tolerance`` (bisection; both errors
+    grow monotonically with the step inside the stability interval)."""
+    lo, hi = 0.0, 0.999 * stability_limit(method)
+    if frequency_error(method, hi) <= tolerance:
+        return hi
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if frequency_error(method, mid) > tolerance:
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
 class FixedStepper(Stepper):
-    """Common part of the fixed-step methods: step choice and event crossing."""
+    """Common part of the fixed-step methods: the step rule, its guard, the compiled path and
+    event crossing."""
 
     safety: ClassVar[float] = 0.9
 
     def __init__(self, model: Model, t0=0.0, x0=None, inputs=None, step: float = 0.0,
-                 max_step: float = math.inf):
+                 max_step: float = math.inf, tolerance: float = DEFAULT_TOLERANCE):
         super().__init__(model, t0, x0, inputs)
-        limit = stability_limit(self.method) * model.stable_step(self.x)
-        if step and step > 0:
-            if step > limit:
-                f_max = 1.0 / (2 * math.pi * model.stable_step(self.x))
-                raise ValueError(
-                    f"solver.step = {step:.6g} s is above the stable limit {limit:.6g} s of the "
-                    f"{self.method} stepper for this {model.name} model (highest natural "
-                    f"frequency {f_max:.6g} Hz); use a step <= {limit:.6g} s or 0 for automatic")
-            self.h = float(step)
-        else:
-            if not math.isfinite(limit):
-                raise ValueError(f"the {model.name} model reports no stability limit; give "
-                                 f"solver.step explicitly for the {self.method} stepper")
-            # max_step: a bound from outside stability, e.g. one event per step
-            self.h = min(self.safety * limit, float(max_step))
+        if not (isinstance(tolerance, (int, float)) and 0 < tolerance <= 0.1):
+            raise ValueError(f"solver.tolerance must be in (0, 0.1], got {tolerance!r}")
+        self.tolerance = float(tolerance)
+        self.fixed_step = float(step) if step and step > 0 else 0.0
+        self.max_step = float(max_step) if max_step and max_step > 0 else math.inf
+        self.limit = stability_limit(self.method)
+        w = model.omega_at(self.t, self.x, self.inputs)
+        limit = self.limit / w
+        if self.fixed_step:
+            if self.fixed_step > limit:
+                raise ValueError(self._unstable_text(self.fixed_step, w, None))
+        elif not math.isfinite(limit):
+            raise ValueError(f"the {model.name} model reports no stability limit; give "
+                             f"solver.step explicitly for the {self.method} stepper")
         self.stable_limit = limit
+        #: the step rule for the compiled loops (rk4_loop.CF_*): explicit step, tolerance's
+        #: h omega, safety times the stability limit, the limit, an outer bound
+        theta = (accuracy_step(self.method, self.tolerance)
+                 if getattr(model, "tolerance_applies", True) else math.inf)
+        self.cfg = np.array([self.fixed_step, theta, self.safety * self.limit, self.limit,
+                             self.max_step])
+        #: the step bound at the initial state and input speed (the step itself follows the
+        #: state and the input speed)
+        self.h = (self.fixed_step or
+                  self.step_bound(w, model.event_step(abs(self.inputs.speed))))
+        self._spare = np.empty_like(self.x)
+        self._out = np.empty((2, len(OUTPUT_NAMES)))
+        self._log = np.empty(EVENTS_PER_STEP)
+        self._empty_states = np.empty((0, self.x.size))
 
-    #: let a model that offers ``advance_compiled`` (a compiled loop of this method over the
-    #: communication step, e.g. levels 1-2 with numba) do the stepping; False forces Python
+    def step_bound(self, omega: float, h_event: float = math.inf) -> float:
+        """The automatic step bound for a state whose highest natural frequency is ``omega``
+        and an event step ``h_event`` (rk4_loop._step_bound: min of the tolerance's step, 90 %
+        of the stability limit, max_step and the event step)."""
+        theta, stab = self.cfg[1], self.cfg[2]
+        h = min(theta / omega, stab / omega) if omega > 0 else math.inf
+        return min(h, self.max_step, h_event)
+
+    def _unstable_text(self, step, omega, t) -> str:
+        limit = self.limit / omega
+        where = "" if t is None else f" at t = {t:.6g} s"
+        return (f"solver.step = {step:.6g} s is above the stable limit {limit:.6g} s of the "
+                f"{self.method} stepper for this {self.model.name} model{where} (highest natural "
+                f"frequency {omega / (2 * math.pi):.6g} Hz); use a step <= {limit:.6g} s or 0 "
+                "for automatic")
+
+    #: let a model that offers compiled loops (``advance_held`` / ``advance_points``, e.g.
+    #: levels 1-3 with numba) do the stepping; False forces the Python loops
     compiled: bool = True
 
-    def _integrate(self, t0, t1, source):
-        fast = getattr(self.model, "advance_compiled", None) if self.compiled else None
-        if fast is not None:
-            res = fast(self.method, t0, t1, self.x, self.h, source)
-            if res is not None:
-                x, steps, events, evals, times = res
-                self.stats["steps"] += steps
-                self.stats["events"] += events
-                self.stats["rhs_evaluations"] += evals
-                self.event_log.extend(times)
-                self.x = x
-                if not np.all(np.isfinite(x)):
-                    self.model.check(t1, x)
-                return
-        n = max(1, math.ceil((t1 - t0) / self.h - 1e-9))
-        h = (t1 - t0) / n
-        switch = self.model.switching_functions
-        t, x = t0, self.x
-        g0 = switch(t, x, source(t))
-        for _ in range(n):
-            x_new = self._step(t, x, h, source)
-            g1 = switch(t + h, x_new, source(t + h)) if g0.size else g0
-            if g0.size and _changed(g1, g0):
-                x_new = self._cross(t, x, h, x_new, g0, g1, source)
-                self.stats["events"] += 1
-                g1 = switch(t + h, x_new, source(t + h))
-            t, x, g0 = t + h, x_new, g1
-            self.stats["steps"] += 1
-            if not np.all(np.isfinite(x)):
-                self.x = x
-                self.model.check(t, x)
-        self.x = x
+    def _has_compiled(self) -> bool:
+        can = self.__dict__.get("_can_compile")
+        if can is None:     # what the model offers for this method (fixed once built)
+            model = self.model
+            can = self._can_compile = (model.n_states > 0
+                                       and self.method in getattr(model, "compiled_methods", ())
+                                       and model._compiled(self.method))
+        return self.compiled and can
+
+    # --- compiled paths ---------------------------------------------------------------------
+    def _advance_held(self, t_end, angle, speed, acceleration, torque):
+        if not self._has_compiled():
+            if self.model.n_states:
+                return None
+            return super()._advance_held(t_end, angle, speed, acceleration, torque)
+        self.refuse_bad_inputs(angle, speed, torque)
+        t0 = self.t
+        a1 = angle + speed * (t_end - t0)
+        if t_end <= t0:
+            row = self._row
+            self.model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row)
+            self._commit_outputs(t_end, row)
+            self.t = t_end
+            self._set_held(a1, speed, torque, acceleration)
+            return row
+        wall = time.perf_counter()
+        out = self._out
+        res = self.model.advance_held(self.method, self.x, self._spare, t0, t_end, float(angle),
+                                      float(speed), float(acceleration), float(torque),
+                                      self.cfg, out, self._log)
+        self._finish(res, t_end, self._log, out)
+        self.stats["wall_time"] += time.perf_counter() - wall
+        self._set_held(a1, speed, torque, acceleration)
+        return out[1]
+
+    def _advance_source(self, t_end, source):
+        if not self.model.n_states or not self._has_compiled() or t_end <= self.t:
+            return None
+        u0, u1 = source(self.t), source(t_end)
+        times = np.array([self.t, t_end])
+        arrays = [np.array([getattr(u0, k), getattr(u1, k)], float)
+                  for k in ("angle", "speed", "acceleration", "torque")]
+        out = self._out
+        self._run_points(times, arrays, out, self._empty_states)
+        self.inputs = u1
+        return out[1]
+
+    def advance_points(self, times, angle, speed, acceleration, torque, out) -> bool:
+        if not self._has_compiled():
+            return False
+        times = self._check_times(times)
+        arrays = [np.ascontiguousarray(a, float) for a in (angle, speed, acceleration, torque)]
+        self._run_points(times, arrays, out, self._empty_states)
+        self._set_held(float(arrays[0][-1]), float(arrays[1][-1]), float(arrays[3][-1]),
+                       float(arrays[2][-1]))
+        return True
 
     def advance_batch(self, times, angle, speed, acceleration, torque):
-        fast = getattr(self.model, "advance_compiled_many", None) if self.compiled else None
-        times = np.asarray(times, float)
-        if fast is None or times.size < 2 or self.model.n_states == 0:
+        if not self._has_compiled() or np.size(times) < 2:
             return None
-        if abs(times[0] - self.t) > 1e-12 * max(1.0, abs(self.t)) or np.any(np.diff(times) <= 0):
-            raise ValueError("advance_batch needs increasing times starting at the current "
+        times = self._check_times(times)
+        arrays = [np.ascontiguousarray(a, float) for a in (angle, speed, acceleration, torque)]
+        states = np.empty((times.size, self.x.size))
+        self._run_points(times, arrays, np.empty((0, len(OUTPUT_NAMES))), states)
+        self._set_held(float(arrays[0][-1]), float(arrays[1][-1]), float(arrays[3][-1]),
+                       float(arrays[2][-1]))
+        return states
+
+    def _check_times(self, times) -> np.ndarray:
+        times = np.ascontiguousarray(times, float)
+        if (times.size < 2 or abs(times[0] - self.t) > 1e-12 * max(1.0, abs(self.t))
+                or np.any(np.diff(times) <= 0)):
+            raise ValueError("advance_points needs increasing times starting at the current "
                              f"time {self.t!r} s")
+        return times
+
+    def _run_points(self, times, arrays, out, states) -> None:
+        angle, speed, acceleration, torque = arrays
+        self.refuse_bad_inputs(angle, speed, torque)
         wall = time.perf_counter()
-        res = fast(self.method, times, self.x, self.h, angle, speed, acceleration, torque)
-        if res is None:
-            return None
-        states, reached, steps, events, evals, log = res
+        log = np.empty(1000)
+        res = self.model.advance_points(self.method, self.x, self._spare, times, angle, speed,
+                                        acceleration, torque, self.cfg, out, states, log,
+                                        EVENTS_PER_STEP)
+        reached, status, steps, events, evals, logged = res[:6]
+        if logged > log.size:
+            log = np.roll(log, -(logged % log.size))
+        self._finish(res, float(times[-1]), log, out)
+        self.stats["wall_time"] += time.perf_counter() - wall
+
+    def _finish(self, res, t_end, log, out) -> None:
+        """Book a compiled call's result: on success commit the new state (swap the buffers);
+        otherwise raise the model's message and keep the old state. ``out``: the outputs
+        array of the call (rows from 1), named in the message when they are not finite."""
+        reached, status, steps, events, evals, logged, t_status, omega = res
         self.stats["steps"] += steps
         self.stats["events"] += events
         self.stats["rhs_evaluations"] += evals
-        self.event_log.extend(log)
-        self.model.check_states(times[1:reached + 1], states[1:reached + 1])
-        if reached < times.size - 1:  # pragma: no cover - check_states raises first
-            raise SimulationDiverged(f"{self.model.name} model diverged at "
-                                     f"t = {times[reached]:.6g} s (non-finite state)")
-        self.t = float(times[-1])
-        self.x = states[-1].copy()
-        self.inputs = Inputs(float(angle[-1]), float(speed[-1]), float(torque[-1]),
-                             float(acceleration[-1]))
-        self.stats["wall_time"] += time.perf_counter() - wall
-        return states
+        if status:
+            if status == STATUS_OUTPUTS:
+                self._commit_outputs(t_status, out[reached + 1])      # raises, naming them
+            self._raise(int(status), float(t_status), float(omega), self._spare)
+        if logged:
+            self.event_log.extend(log[:min(int(logged), log.size)].tolist())
+        self.x, self._spare = self._spare, self.x
+        self.t = t_end
+
+    def _raise(self, status, t, omega, x):
+        if status == STATUS_UNSTABLE:
+            raise SimulationDiverged(self._unstable_text(self.fixed_step, omega, t))
+        self.model.check(t, x)   # the model's own sentence (non-finite state, amplitude, ...)
+        raise SimulationDiverged(f"{self.model.name} model diverged at t = {t:.6g} s "
+                                 f"(non-finite state); try a smaller solver.step or "
+                                 "solver.tolerance")
+
+    # --- Python loops (the twin of the compiled ones) -----------------------------------------
+    def _integrate(self, t0, t1, source):
+        """The step rule of the module docstring over [t0, t1], in Python on the model
+        interface (what the compiled loops do; tests compare them)."""
+        model = self.model
+        u0, u1 = source(t0), source(t1)
+        h_event = model.event_step(max(abs(u0.speed), abs(u1.speed)))
+        switch = model.switching_functions
+        fixed = self.fixed_step
+        t, x = t0, self.x
+        g0 = switch(t, x, u0)
+        h = 0.0
+        while t < t1:
+            w = model.omega_at(t, x, source(t))
+            if fixed:
+                if fixed * w > self.limit:
+                    raise SimulationDiverged(self._unstable_text(fixed, w, t))
+                h_max = fixed
+            else:
+                h_max = self.step_bound(w, h_event)
+            rest = t1 - t
+            if h == 0.0 or h > h_max or h > rest:
+                m = max(1.0, math.ceil(rest / h_max - 1e-9))
+                h = rest / m
+            if h >= rest * (1.0 - 1e-12):
+                t_next, h = t1, rest
+            else:
+                t_next = t + h
+            x_new = self._step(t, x, h, source)
+            g1 = switch(t_next, x_new, source(t_next)) if g0.size else g0
+            if g0.size and _changed(g1, g0):
+                x_new = self._cross(t, x, h, x_new, g0, g1, source)
+                self.stats["events"] += 1
+                g1 = switch(t_next, x_new, source(t_next))
+            t, x, g0 = t_next, x_new, g1
+            self.stats["steps"] += 1
+            if not np.all(np.isfinite(x)):
+                model.check(t, x)
+        self.x = x
 
     def _cross(self, t, x, h, x1, g0, g1, source):
         """The state at t + h when a switching function changes sign over the step [t, t + h]
@@ -547,10 +844,11 @@ METHODS = ("rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda")
 
 def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: Inputs | None = None,
                  step: float = 0.0, rtol: float = 1e-6, x0=None, max_step: float = math.inf,
-                 **options) -> Stepper:
+                 tolerance: float = DEFAULT_TOLERANCE, **options) -> Stepper:
     """A stepper for ``model``. ``method="auto"`` lets the model choose
-    (its ``preferred_method`` attribute; rk45 otherwise). ``max_step`` bounds the automatic
-    step of the fixed-step methods (an explicit ``step`` is kept as given)."""
+    (its ``preferred_method`` attribute; rk45 otherwise). Fixed-step methods take ``step``
+    (0: automatic, from ``tolerance`` and the dynamics) and ``max_step`` (an outer bound on the
+    automatic step); adaptive ones ``rtol``."""
     if method == "auto":
         method = getattr(model, "preferred_method", "rk45")
     refuse = getattr(model, "refuse_method", None)
@@ -558,9 +856,9 @@ def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: In
     if reason:
         raise ValueError(reason)
     if method == "rk4":
-        return RK4(model, t0, x0, inputs, step=step, max_step=max_step)
+        return RK4(model, t0, x0, inputs, step=step, max_step=max_step, tolerance=tolerance)
     if method == "verlet":
-        return Verlet(model, t0, x0, inputs, step=step, max_step=max_step)
+        return Verlet(model, t0, x0, inputs, step=step, max_step=max_step, tolerance=tolerance)
     if method in Adaptive.SCIPY:
         # max_step: a bound on the step (a scene's quarter tooth period) so that no step
         # spans a seating and the release after it unseen by scipy's event detection

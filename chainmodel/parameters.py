@@ -236,11 +236,16 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("solver.method", "auto", "", "time stepper (see chainmodel.integrate)", kind=str,
        choices=("auto", "rk4", "verlet", "rk45", "dop853", "radau", "bdf", "lsoda"),
        levels=(1, 2, 3)),
-    _p("solver.step", 0.0, "s", "fixed step; 0 chooses the largest stable step automatically (in a scene "
-       "at most a quarter tooth period at its input speed, levels 1-2)",
+    _p("solver.step", 0.0, "s", "fixed step; 0 chooses it automatically from solver.tolerance, the "
+       "highest natural frequency of the current state and a quarter tooth period at the current "
+       "input speed (docs/numerics.md)",
        minimum=0.0, levels=(1, 2, 3)),
     _p("solver.rtol", 1e-6, "", "relative tolerance of the adaptive steppers", minimum=1e-12,
        maximum=0.1, levels=(1, 2, 3)),
+    _p("solver.tolerance", 5e-4, "",
+       "accuracy of the automatic fixed step (rk4, verlet) at levels 1-2: the step keeps the "
+       "relative frequency error of the fastest mode below this; the measured output errors "
+       "stay within a few times it (docs/numerics.md)", minimum=1e-10, maximum=0.1, levels=(1, 2)),
 )
 
 BY_NAME: dict[str, Parameter] = {p.name: p for p in PARAMETERS}

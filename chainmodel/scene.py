@@ -425,10 +425,10 @@ class Scene:
     def stepper(self, model: Model | None = None) -> Stepper:
         model = model or self.model()
         p = self.parameters
-        # The automatic fixed step is a stability bound; for a heavy drive (C1: a 28 Hz sprocket
-        # mode) it can exceed the tooth period, and a fixed step crosses only its first event.
+        # the automatic fixed step follows solver.tolerance, the state's highest frequency and a
+        # quarter tooth period at the current input speed, as inside the FMU (docs/numerics.md)
         return make_stepper(model, p["solver.method"], 0.0, self.inputs(0.0), step=p["solver.step"],
-                            rtol=p["solver.rtol"], max_step=model.event_step(self.operating.speed))
+                            rtol=p["solver.rtol"], tolerance=p["solver.tolerance"])
 
 
 def _finite(name, value):

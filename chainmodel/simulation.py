@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import math
 import sys
 import time as _time
 from pathlib import Path
@@ -11,7 +10,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .models import ALL_OUTPUTS, SimulationDiverged
+from .models import ALL_OUTPUTS, SimulationDiverged  # noqa: F401  (re-exported)
 from .parameters import FIDELITY_NAMES
 from .scene import Scene, load_scene
 
@@ -25,7 +24,7 @@ class Result:
 
     def __init__(self, scene: Scene, time: np.ndarray, data: dict[str, np.ndarray],
                  descriptions: dict[str, str], wall_time: float, stats: dict,
-                 static_tension: float, snapshots: list | None = None):
+                 static_tension, snapshots: list | None = None):
         self.scene = scene
         self.time = time
         self._data = data
@@ -33,8 +32,16 @@ class Result:
         self.units = dict(UNITS)
         self.wall_time = wall_time
         self.stats = stats
-        self.static_tension = static_tension
+        # a number, or a callable computed on first use (level 3 settles the chain for it)
+        self._static_tension = static_tension
         self.snapshots = snapshots or []
+
+    @property
+    def static_tension(self) -> float:
+        """Static span tension at rest with no load of this level [N] (Model.static_tension)."""
+        if callable(self._static_tension):
+            self._static_tension = float(self._static_tension())
+        return self._static_tension
 
     @property
     def fidelity(self) -> int:
@@ -115,33 +122,27 @@ BATCH_POINTS = 4096
 
 
 def _run_batched(scene, model, stepper, times, data, bar) -> bool:
-    """Every communication point through the stepper's batched path (one compiled call per
-    BATCH_POINTS points, the inputs sampled beforehand, outputs vectorised): the numbers of the
-    per-point loop without its Python round trip per point. False (nothing done) when the
-    stepper or model has no such path."""
-    outputs_many = getattr(model, "outputs_many", None)
-    if outputs_many is None:
-        return False
+    """Every communication point through the stepper's compiled many-point path (one call per
+    BATCH_POINTS points, the inputs sampled beforehand, the outputs computed inside): the
+    numbers of the per-point loop without its Python round trip per point. False (nothing
+    done) when the stepper and model have no such path."""
     inputs = scene.input_arrays(times)
+    out = np.empty((min(BATCH_POINTS, len(times) - 1) + 1, len(ALL_OUTPUTS)))
+    names = [o.name for o in ALL_OUTPUTS]
+    first = stepper.outputs()
     start = 0
     while start < len(times) - 1:
         stop = min(start + BATCH_POINTS, len(times) - 1)
         sl = slice(start, stop + 1)
-        states = stepper.advance_batch(times[sl], *(a[sl] for a in inputs))
-        if states is None:
+        rows = out[:stop - start + 1]
+        if not stepper.advance_points(times[sl], *(a[sl] for a in inputs), rows):
             return False            # only possible at the first chunk: nothing written yet
-        out = outputs_many(times[sl], states, *(a[sl] for a in inputs))
-        first = 0 if start == 0 else 1   # the chunk's first point is the previous one's last
-        finite = np.all([np.isfinite(out[name][first:]) for name in data], axis=0)
-        if not np.all(finite):          # the per-point loop's check, at the earliest point
-            k = first + int(np.argmax(~finite))
-            bad = [n for n in data if not math.isfinite(out[n][k])]
-            raise SimulationDiverged(f"{model.name} model produced non-finite outputs "
-                                     f"{', '.join(bad[:5])} at t = {times[start + k]:.6g} s")
-        for name in data:
-            data[name][start + first:stop + 1] = out[name][first:]
+        for k, name in enumerate(names):
+            data[name][start + 1:stop + 1] = rows[1:, k]
         bar.update(float(times[stop]))
         start = stop
+    for name in names:
+        data[name][0] = first[name]
     return True
 
 
@@ -150,10 +151,10 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     """Run ``scene`` with its stepper over its duration, sampling every output at each
     communication point; ``snapshot_every=k`` keeps the model's snapshot every k samples.
 
-    ``batched``: where the stepper and model offer it (levels 1-2 with the compiled RK4), run
-    many communication points in one compiled call and compute the outputs vectorised - the
-    same numbers as the per-point loop (``batched=False``, one ``Stepper.advance`` per point as
-    the FMU steps), without its Python overhead per point."""
+    ``batched``: where the stepper and model offer it (levels 1-3 with their compiled loops),
+    run many communication points in one compiled call, outputs included - the same numbers as
+    the per-point loop (``batched=False``, one ``Stepper.advance`` per point as the FMU steps),
+    without its Python overhead per point."""
     model = scene.model()
     scene.check_operating_point(model)
     times = scene.times()
@@ -166,7 +167,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         wall = _time.perf_counter() - wall
         return Result(scene, times, data, model.output_descriptions(), wall,
                       {"steps": 0, "rhs_evaluations": 0, "events": 0, "wall_time": wall},
-                      model.static_tension())
+                      model.static_tension)
     stepper = scene.stepper(model)
     data = {o.name: np.empty(len(times)) for o in ALL_OUTPUTS}
     snaps = []
@@ -176,7 +177,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         wall = _time.perf_counter() - wall
         bar.close()
         return Result(scene, times, data, model.output_descriptions(), wall,
-                      dict(stepper.stats), model.static_tension(), snaps)
+                      dict(stepper.stats), model.static_tension, snaps)
     out = stepper.outputs()
     for i, t in enumerate(times):
         if i:
@@ -189,7 +190,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     wall = _time.perf_counter() - wall
     bar.close()
     return Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
-                  model.static_tension(), snaps)
+                  model.static_tension, snaps)
 
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,

@@ -21,12 +21,15 @@ Acceleration
     a_k = (w_k - w_{k-1}) / (t_k - t_{k-1}); 0 at the first point (no history). The same
     estimate is used for the step from t_k and for outputs at t_k.
 Feedthrough
-    After fmi2DoStep the outputs at t_k+1 are those of the held inputs. If the master then sets
-    new inputs at t_k+1 and reads outputs, they are recomputed from the state at t_k+1 and the
-    new inputs (every output may depend directly on the inputs; ModelStructure says so).
-    A stateless level (0) has nothing to integrate: its outputs are computed when read, once,
-    from whichever inputs apply, so a master that sets inputs before reading pays one
-    evaluation per step, not two.
+    After fmi2DoStep the outputs at t_k+1 are those of the held inputs (computed in the step's
+    compiled call). If the master then sets new inputs at t_k+1 and reads outputs, they are
+    recomputed from the state at t_k+1 and the new inputs (every output may depend directly on
+    the inputs; ModelStructure says so) - one more compiled call, at every level.
+Data path
+    One fmi2DoStep is one call of the stepper's ``advance_held`` (one compiled call per level:
+    the step, its stable-step guard and every output into a preallocated buffer); the adapter
+    copies the 15 values into its table. The stepper builds the new state beside the old one and
+    commits it only on success, so a failed step needs no saved copy; fmi2GetFMUstate copies.
 Errors
     pythonfmu 0.7 turns any Python exception into fmi2Fatal, so the adapter raises only where it
     must (a bad parameter at fmi2ExitInitializationMode, a state that cannot be restored) and
@@ -347,7 +350,9 @@ class ChainDrive(Fmi2Slave):
             self._param_by_vr[vr] = p
         self._output_names = [name for _, name in self._output_map]
         self._output_vrs = frozenset(vr for vr, _ in self._output_map)
+        self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
         self._in_angle, self._in_speed, self._in_torque = self._input_vrs
+        self._input_set = frozenset(self._input_vrs)
 
         # simulation state
         self._t0 = 0.0
@@ -355,8 +360,7 @@ class ChainDrive(Fmi2Slave):
         self._stepper = None
         self._model_params: dict | None = None  # validated parameters the model was built with
         self._params_changed = True
-        self._stale = False          # outputs must be recomputed before they are read
-        self._held = False           # ... from the held inputs (True) or the inputs set (False)
+        self._stale = False          # outputs must be recomputed (inputs set) before read
         self._prev_t = None          # previous communication point and the speed set there
         self._prev_speed = 0.0
         self._warned_outputs = False
@@ -397,7 +401,7 @@ class ChainDrive(Fmi2Slave):
             self._params_changed = True
         elif vr in self._input_vrs:
             table[vr] = value
-            self._stale, self._held = True, False
+            self._stale = True
         else:
             self.log(_fmi_text(f"{self.vars[vr].name} is an output and cannot be set; ignored"),
                      Fmi2Status.error)
@@ -433,11 +437,11 @@ class ChainDrive(Fmi2Slave):
 
     def set_real(self, vrs, values):
         # hot path: the three inputs, every step
-        real, inputs = self._real, self._input_vrs
+        real, inputs = self._real, self._input_set
         for vr, value in zip(vrs, values):
             if vr in inputs:
                 real[vr] = value
-                self._stale, self._held = True, False
+                self._stale = True
             elif vr in real:
                 self._set_one(vr, value)
             else:
@@ -491,17 +495,23 @@ class ChainDrive(Fmi2Slave):
         x0 = None if state is None else state.x
         stepper = self._I.make_stepper(model, params["solver.method"], t, u,
                                        step=params["solver.step"], rtol=params["solver.rtol"],
-                                       x0=x0)
+                                       tolerance=params["solver.tolerance"], x0=x0)
         if state is not None:
             stepper.set_state(state)
         self._stepper, self._model_params = stepper, params
         self._params_changed = False
         return stepper
 
-    def _store_outputs(self, out: dict):
-        real = self._real
-        for vr, name in self._output_map:
-            real[vr] = out[name]
+    def _store_row(self, row):
+        """The outputs row of the stepper (ALL_OUTPUTS order) into the value table."""
+        self._real.update(zip(self._output_vr_list, row.tolist()))
+
+    def _acceleration(self, t: float, speed: float) -> float:
+        """Backward difference of the speed input between communication points (0 at the
+        first point)."""
+        if self._prev_t is not None and t > self._prev_t:
+            return (speed - self._prev_speed) / (t - self._prev_t)
+        return 0.0
 
     def _refresh_outputs(self):
         """Outputs for the current state and the inputs set since (direct feedthrough)."""
@@ -509,10 +519,11 @@ class ChainDrive(Fmi2Slave):
             if self._stepper is None or (self._params_changed and not self._initialized):
                 self._build(self._t0)
             st = self._stepper
-            u = st.inputs if self._held else self._inputs_at(st.t)
-            u.check()
-            out = st.model.outputs(st.t, st.x, u)
-            bad = [n for n in self._output_names if not math.isfinite(out[n])]
+            real = self._real
+            speed = real[self._in_speed]
+            row = st.outputs_held(real[self._in_angle], speed, self._acceleration(st.t, speed),
+                                  real[self._in_torque])
+            bad = [n for n, v in zip(self._output_names, row.tolist()) if not math.isfinite(v)]
             if bad:
                 raise self._M.SimulationDiverged(f"non-finite outputs {', '.join(bad[:5])}")
         except Exception as exc:  # never raise from a getter: pythonfmu would report fatal
@@ -521,7 +532,7 @@ class ChainDrive(Fmi2Slave):
                          Fmi2Status.warning)
                 self._warned_outputs = True
             return
-        self._store_outputs(out)
+        self._store_row(row)
         self._stale = False
         self._warned_outputs = False
 
@@ -532,12 +543,12 @@ class ChainDrive(Fmi2Slave):
     def exit_initialization_mode(self):
         try:
             st = self._build(self._t0)
-            st.inputs.check()
-            out = st.outputs()
+            u = st.inputs
+            row = st.outputs_held(u.angle, u.speed, u.acceleration, u.torque)
         except Exception as exc:
             self._fail(f"initialization failed: {_why(exc)}")
-        self._store_outputs(out)
-        self._stale = self._held = False
+        self._store_row(row)
+        self._stale = False
         self._initialized = True
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
@@ -566,33 +577,20 @@ class ChainDrive(Fmi2Slave):
             except Exception as exc:
                 self.log(_fmi_text(f"parameter change refused: {_why(exc)}"), Fmi2Status.discard)
                 return False
-        u = self._inputs_at(current_time)
-        if not st.model.n_states:
-            # stateless level (0): nothing to integrate; the outputs at t + h are computed when
-            # read, from the held inputs or from the inputs the master sets at t + h
-            try:
-                u.check()
-            except ValueError as exc:
-                self.log(_fmi_text(f"step from t = {current_time:.9g} s discarded: {_why(exc)}"),
-                         Fmi2Status.discard)
-                return False
-            st.t, st.inputs = current_time + step_size, u.hold(step_size)
-            self._prev_t, self._prev_speed = current_time, u.speed
-            self._stale, self._held = True, True
-            return True
-        saved = st.get_state()
+        real = self._real
+        speed = real[self._in_speed]
         try:
-            out = st.advance(current_time + step_size, u)
-            self._store_outputs(out)
+            row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
+                                  self._acceleration(current_time, speed), real[self._in_torque])
         except Exception as exc:   # diverged, bad input, or a model error: discard the step
-            st.set_state(saved)
             self.log(_fmi_text(f"step from t = {current_time:.9g} s over {step_size:.6g} s "
                                f"discarded, the FMU stays at t = {current_time:.9g} s: "
                                f"{_why(exc)}"),
                      Fmi2Status.discard)
             return False
-        self._prev_t, self._prev_speed = current_time, u.speed
-        self._stale, self._held = False, False
+        self._store_row(row)
+        self._prev_t, self._prev_speed = current_time, speed
+        self._stale = False
         return True
 
     def terminate(self):
@@ -611,7 +609,6 @@ class ChainDrive(Fmi2Slave):
                 "real": list(self._real.items()), "int": list(self._int.items()),
                 "bool": list(self._bool.items()), "str": list(self._str.items()),
                 "t0": self._t0, "initialized": self._initialized, "stale": self._stale,
-                "held": self._held,
                 "prev_t": self._prev_t, "prev_speed": self._prev_speed, "stepper": s}
 
     def _set_fmu_state(self, state):
@@ -639,7 +636,7 @@ class ChainDrive(Fmi2Slave):
                     self._stepper.set_state(saved)
             except Exception as exc:
                 self._fail(f"fmi2SetFMUstate: cannot restore this state: {_why(exc)}")
-        self._stale, self._held = state["stale"], state["held"]
+        self._stale = state["stale"]
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:

@@ -31,16 +31,20 @@ def _same(a, b):
     ("C1", 2, {"modal_modes": 2}),                                      # rigid shaft, span modes
 ])
 def test_batched_run_equals_per_point_run(name, level, overrides, monkeypatch):
-    """Whole runs from rest through the speed ramp: every output at every point, the step,
-    event and evaluation counts; small chunks so that chunk boundaries are crossed too."""
+    """Whole runs from rest through the speed ramp: every output at every point, the step and
+    event counts; small chunks so that chunk boundaries are crossed too."""
     sc = chainmodel.Scene.from_preset(name, fidelity=level, duration=0.08, output_interval=1e-3,
                                       **overrides)
     monkeypatch.setattr(simulation, "BATCH_POINTS", 23)
     a = simulation.run_scene(sc)
     b = simulation.run_scene(sc, batched=False)
     assert b.stats["events"] > 0
-    for key in ("steps", "events", "rhs_evaluations"):
+    for key in ("steps", "events"):
         assert a.stats[key] == b.stats[key], key
+    # the batched loop starts a step from the evaluation that ended the last one where the
+    # inputs there are the same (here: after the ramp), at most one fewer per point
+    n = len(a.time) - 1
+    assert b.stats["rhs_evaluations"] - n <= a.stats["rhs_evaluations"] <= b.stats["rhs_evaluations"]
     _same(a, b)
 
 

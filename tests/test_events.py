@@ -8,7 +8,7 @@ import numpy as np
 
 import chainmodel
 from chainmodel import integrate, simulation
-from chainmodel.models import spans as S
+from chainmodel.models import rk4_loop as S
 
 
 def test_compiled_and_python_crossings_use_the_same_constants():

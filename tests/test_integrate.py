@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from chainmodel.geometry import Drive
-from chainmodel.integrate import (RK4, Adaptive, Verlet, make_stepper, stability_limit)
+from chainmodel.integrate import (RK4, Adaptive, Verlet, accuracy_step, make_stepper,
+                                  stability_limit)
 from chainmodel.models.base import Inputs, Model, SimulationDiverged
 from chainmodel.parameters import defaults
 
@@ -209,8 +210,35 @@ def test_fixed_step_above_stable_limit_is_refused():
     limit = stability_limit("rk4") / w
     with pytest.raises(ValueError, match="stable limit"):
         RK4(Oscillator(), step=1.01 * limit)
-    s = RK4(Oscillator())  # automatic: 90 % of the limit
-    assert s.h == pytest.approx(0.9 * limit)
+    # automatic: the tolerance's step (accuracy_step), which here is below 90 % of the limit
+    s = RK4(Oscillator(), tolerance=1e-3)
+    assert s.h == pytest.approx(accuracy_step("rk4", 1e-3) / w)
+    assert s.h < 0.9 * limit
+
+
+@pytest.mark.parametrize("cls", [RK4, Verlet])
+@pytest.mark.parametrize("tolerance", [1e-2, 1e-4])
+def test_automatic_step_keeps_the_frequency_error_at_the_tolerance(cls, tolerance):
+    """solver.tolerance bounds the relative frequency error of the fastest mode: on
+    x'' = -w^2 x the automatic step's numerical frequency, measured from the phase after 20
+    periods, is the method's exact discrete frequency (RK4: the argument of its amplification
+    factor R(i hw) = 1 - (hw)^2/2 + (hw)^4/24 + i (hw - (hw)^3/6); Verlet: 2 asin(hw / 2)),
+    and that errs by the tolerance."""
+    w = 2 * math.pi
+    s = cls(Oscillator(events=False), tolerance=tolerance)
+    theta = w * s.h
+    if cls is RK4:
+        exact_rel = 1.0 - math.atan2(theta - theta**3 / 6, 1 - theta**2 / 2 + theta**4 / 24) / theta
+    else:
+        exact_rel = 1.0 - 2.0 * math.asin(theta / 2) / theta
+    n = round(20 / s.h)                 # whole steps of exactly s.h
+    out = s.advance(n * s.h)
+    phase = math.atan2(w * out["x"], out["v"])         # exact motion: sin(w t) / w, cos(w t)
+    total = w * n * s.h
+    drift = (total - phase + math.pi) % (2 * math.pi) - math.pi
+    measured = drift / total                           # > 0: the numerical motion lags
+    assert measured == pytest.approx(exact_rel, rel=0.02)
+    assert abs(measured) == pytest.approx(tolerance, rel=0.02)
 
 
 def test_verlet_refuses_first_order_models():
@@ -253,3 +281,34 @@ def test_make_stepper_names_valid_methods():
     with pytest.raises(ValueError, match="rk4"):
         make_stepper(Oscillator(), "euler")
     assert isinstance(make_stepper(Oscillator(), "verlet", step=1e-3), Verlet)
+
+
+# --- the input hook (Model.input_error) ---------------------------------------------------------
+
+class Picky(HeldInput):
+    """Refuses input speeds above 5 rad/s, as a model with a speed limit would."""
+
+    def input_error(self, angle, speed, torque):
+        if abs(speed) > 5.0:
+            return f"input input_shaft.speed = {speed:g} rad/s is above this model's 5 rad/s"
+        return super().input_error(angle, speed, torque)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_non_finite_inputs_are_refused_before_the_step_naming_them(bad):
+    for s in (RK4(HeldInput(), step=0.01), Adaptive(HeldInput(), method="rk45")):
+        s.advance(0.1, Inputs(0.0, 1.0, 0.0))
+        before = (s.t, s.x.copy())
+        with pytest.raises(ValueError, match="load.torque"):
+            s.advance(0.2, Inputs(0.0, 1.0, bad))
+        assert s.t == before[0] and np.array_equal(s.x, before[1])
+
+
+def test_the_models_input_hook_is_asked_before_every_step():
+    s = RK4(Picky(), step=0.01)
+    s.advance(0.1, Inputs(0.0, 4.0, 0.0))
+    with pytest.raises(ValueError, match="above this model's 5 rad/s"):
+        s.advance(0.2, Inputs(0.0, 6.0, 0.0))
+    with pytest.raises(ValueError, match="above this model's 5 rad/s"):
+        s.advance(0.2, lambda t: Inputs(0.0, 60.0 * t, 0.0))        # a source, at its end
+    assert s.t == 0.1

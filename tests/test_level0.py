@@ -286,3 +286,52 @@ def test_static_tension_c1_within_table1_bounds():
     # and close to the mean stretch over the mean span-link count
     mean = k * (float(row["L_mean_over_p"]) - 40) * INCH / n.mean()
     assert T0 == pytest.approx(mean, rel=0.05)
+
+
+# --- the scalar compiled evaluation (models/kinematic_kernel.py) --------------------------------
+
+@pytest.mark.parametrize("name", ["xu2010", "C1", "coarse", "fine"])
+def test_scalar_kernel_equals_the_vectorised_library(name):
+    """The FMU's one-sample evaluation (compiled, and its plain-Python twin ``.py_func``) gives
+    the vectorised KinematicModel.evaluate's outputs to 1e-12 at many random angles, speeds of
+    both signs (forward and reverse branches), accelerations and loads."""
+    from chainmodel.models import ALL_OUTPUTS
+    from chainmodel.models.kinematic_kernel import level0_outputs
+    m = chainmodel.Scene.from_preset(name, fidelity=0).model()
+    rng = np.random.default_rng(7)
+    n = 400
+    angle = rng.uniform(-60, 60, n)
+    speed = rng.uniform(-40, 40, n)
+    speed[:4] = (0.0, -0.0, 1e-300, -1e-300)
+    # loads up to three times what the static tension sum carries: one span goes slack
+    acc = rng.uniform(-200, 200, n)
+    load = rng.uniform(-3, 3, n) * 2 * m.static_tension() * m.drive.driven.pitch_radius
+    ref = m.evaluate(angle, speed, acc, load)
+    K_, G, C = m._kernel_constants
+    out = np.empty(len(ALL_OUTPUTS))
+    assert np.any(speed < 0) and np.any(ref["slack_span.tension"] == 0.0)
+    for fn in (level0_outputs, level0_outputs.py_func):
+        for i in range(n):
+            assert fn(angle[i], speed[i], acc[i], load[i], K_, G, C, out) is True
+            for k, spec in enumerate(ALL_OUTPUTS):
+                assert out[k] == pytest.approx(ref[spec.name][i], rel=1e-12, abs=1e-12), \
+                    (spec.name, i)
+
+
+def test_scalar_rotation_equals_driven_rotation_over_many_periods():
+    """kinematic_kernel.driven_rotation against kinematics.driven_rotation, forward and reverse,
+    on a fine grid over several tooth periods (seating and release inside) and at the event
+    angles themselves."""
+    from chainmodel.models.kinematic_kernel import driven_rotation, fourbar_constants
+    drive = chainmodel.Scene.from_preset("xu2010").drive
+    Kc = fourbar_constants(drive)
+    period = 2 * math.pi / drive.n_driver
+    phi = np.concatenate([np.linspace(-3 * period, 3 * period, 2001),
+                          np.arange(-3, 4) * period])
+    for reverse in (False, True):
+        ref = K.driven_rotation(drive, phi, 11.0, -3.0, reverse=reverse)
+        got = np.array([driven_rotation(p, 11.0, -3.0, reverse, Kc) for p in phi])
+        for k, field in enumerate(("driven_angle", "driven_speed", "driven_acceleration",
+                                   "velocity_ratio", "span_length")):
+            np.testing.assert_allclose(got[:, k], getattr(ref, field), rtol=1e-12, atol=1e-12,
+                                       err_msg=f"{field}, reverse={reverse}")

@@ -46,7 +46,8 @@ from . import fourbar as fb
 from .rotation import driven_rotation
 
 __all__ = ["SpanGeometry", "ChainGeometry", "chain_geometry", "wrap_length", "wrap_length_range",
-           "centre_distance_for_links", "roller_positions", "tooth_period_samples"]
+           "centre_distance_for_links", "roller_positions", "tooth_period_samples",
+           "tooth_period_geometry"]
 
 _EDGE = 1e-9  # rad: an endpoint exactly at an event belongs to the state after the event
 
@@ -186,6 +187,15 @@ def tooth_period_samples(drive: Drive, samples: int = 400) -> np.ndarray:
     """``samples`` driver rotations evenly over one tooth period [0, 2 pi / n_c)."""
     samples = check_whole("samples", samples, 2)
     return np.arange(samples) * (2 * math.pi / drive.n_driver / samples)
+
+
+@lru_cache(maxsize=64)
+def tooth_period_geometry(drive: Drive, samples: int = 100) -> ChainGeometry:
+    """:func:`chain_geometry` of the level-0 configuration (driven rotation from the four-bar)
+    at ``samples`` driver rotations over one tooth period, computed once per drive and process
+    (the reduced models' tooth-period means and the static tension use it at every set-up)."""
+    phi1 = tooth_period_samples(drive, samples)
+    return chain_geometry(drive, phi1, driven_rotation(drive, phi1).driven_angle)
 
 
 def wrap_length(drive: Drive, theta4=None, *, driver_angle=None) -> np.ndarray:

@@ -204,6 +204,12 @@ class Model(ABC):
         interval on the imaginary axis, i.e. 1 / omega_max); inf when unknown."""
         return math.inf
 
+    def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
+        """Highest natural frequency of the state x under the inputs u [rad/s], for the
+        fixed-step rule and its stable-step guard (chainmodel.integrate); by default the
+        bound 1 / stable_step(x)."""
+        return 1.0 / self.stable_step(x)
+
     def event_step(self, speed: float) -> float:
         """Largest fixed step that resolves the switching functions' sign changes one at a
         time when the driver turns at ``speed`` [rad/s]; inf for a model without events."""
@@ -226,6 +232,14 @@ class Model(ABC):
         it at once, raising for the same first state)."""
         for t, x in zip(times, states):
             self.check(float(t), x)
+
+    def outputs_into(self, t: float, x: np.ndarray, angle: float, speed: float,
+                     acceleration: float, torque: float, out: np.ndarray) -> None:
+        """Every output of ALL_OUTPUTS, in that order, into ``out`` (the FMU's buffer). Levels
+        with a compiled output function override this; the default goes through outputs()."""
+        res = self.outputs(t, x, Inputs(angle, speed, torque, acceleration))
+        for k, spec in enumerate(ALL_OUTPUTS):
+            out[k] = res[spec.name]
 
     def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
         """Extra arrays for plots (e.g. roller positions); empty by default."""

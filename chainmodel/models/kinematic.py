@@ -32,10 +32,11 @@ import numpy as np
 
 from ..geometry import Drive
 from ..kinematics import driven_rotation
-from ..kinematics.wrapping import chain_geometry, tooth_period_samples
+from ..kinematics.wrapping import chain_geometry, tooth_period_geometry
 from . import limits
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension,
                    check_pretension, quasi_static_extras)
+from .kinematic_kernel import level0_outputs
 
 __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stiffness",
            "seat_series_compliance", "seated_tension", "pretension_error", "loose_chain_error"]
@@ -99,9 +100,7 @@ def seat_series_compliance(params: Mapping[str, Any], drive: Drive | None = None
 def _rest_geometry(drive: Drive) -> tuple[float, float]:
     """(excess L - M p, span link count n_u + n_l) at rest (four-bar), as tooth-period means:
     the excess as <(L - M p) / (n_u + n_l)> <n_u + n_l>, the mean stretch of a span link."""
-    phi1 = tooth_period_samples(drive, 100)
-    phi2 = driven_rotation(drive, phi1).driven_angle
-    g = chain_geometry(drive, phi1, phi2)
+    g = tooth_period_geometry(drive, 100)
     links = g.upper_links + g.lower_links
     n = float(np.mean(links))
     return float(np.mean((g.wrap_length - drive.links * drive.pitch) / links)) * n, n
@@ -313,7 +312,32 @@ class KinematicModel(Model):
         out["slack_span.tension"] += centrifugal
         return out
 
+    @cached_property
+    def _kernel_constants(self):
+        """(K, G, C) of the scalar compiled evaluation (:mod:`.kinematic_kernel`)."""
+        from . import kinematic_kernel as KK
+        from .spans import geometry_constants
+        p, d = self.params, self.drive
+        C = np.empty(KK.C_SIZE)
+        C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],
+                                              p["driven.damping"])
+        C[KK.C_SUM] = 2 * self._static_tension
+        C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
+                                                          * math.cos(p["drive.inclination"]))
+        C[KK.C_RATIO] = d.tooth_ratio
+        C[KK.C_CENTRIFUGAL] = float(centrifugal_tension(d, p, 1.0))   # times speed^2
+        return KK.fourbar_constants(d), geometry_constants(d), C
+
+    def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
+        """Every output (ALL_OUTPUTS order) into ``out``: the scalar compiled twin of
+        :meth:`evaluate` (:func:`.kinematic_kernel.level0_outputs`), one call; True when all
+        are finite."""
+        K, G, C = self._kernel_constants
+        return level0_outputs(float(angle), float(speed), float(acceleration), float(torque), K, G, C,
+                       out)
+
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
-        res = self.evaluate(u.angle, u.speed, u.acceleration, u.torque)
-        return {k: float(v) for k, v in res.items()}
+        out = np.empty(len(ALL_OUTPUTS))
+        self.outputs_into(t, x, u.angle, u.speed, u.acceleration, u.torque, out)
+        return {o.name: float(v) for o, v in zip(ALL_OUTPUTS, out)}
 

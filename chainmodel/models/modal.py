@@ -142,11 +142,15 @@ class ModalModel(TorsionalModel):
         n = self.n_modes
         return np.concatenate([super().state_scale(), np.full(2 * n, 1e-4), np.full(2 * n, 1e-2)])
 
+    def _amplitude_limit(self) -> float:
+        """A tenth of the shorter span: beyond it the string model does not hold (check)."""
+        return 0.1 * min(self.reference["l_up"], self.reference["l_low"])
+
     def check(self, t: float, x: np.ndarray) -> None:
         super().check(t, x)
         base = self.n_sprocket_states
         q = np.abs(x[base:base + 2 * self.n_modes])
-        limit = 0.1 * min(self.reference["l_up"], self.reference["l_low"])
+        limit = self._amplitude_limit()
         if q.size and np.max(q) > limit:
             raise SimulationDiverged(
                 f"modal model: a span's transverse amplitude reached {np.max(q):.3g} m at "
@@ -189,17 +193,11 @@ class ModalModel(TorsionalModel):
             " (sum of the span's Galerkin modes at its middle)")
         return d
 
-    def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
-        return float(aux[S.A_MID_UP] if upper else aux[S.A_MID_LOW])
-
-    def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
-        return np.where(upper, aux[:, S.A_MID_UP], aux[:, S.A_MID_LOW])
-
     def check_states(self, times, states) -> None:
         """:meth:`check` for many states (vectorised): raises for the first that fails."""
         base = self.n_sprocket_states
         q = np.abs(states[:, base:base + 2 * self.n_modes])
-        limit = 0.1 * min(self.reference["l_up"], self.reference["l_low"])
+        limit = self._amplitude_limit()
         bad = ~np.all(np.isfinite(states), axis=1)
         if q.shape[1]:
             bad |= np.max(q, axis=1) > limit

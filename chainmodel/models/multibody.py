@@ -50,6 +50,7 @@ from ..kinematics import fourbar as fb
 from ..kinematics.wrapping import chain_geometry, roller_positions
 from . import multibody_kernels as K
 from .base import Inputs, Model, SimulationDiverged
+from .spans import geometry_constants, span_geometry
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 
@@ -59,9 +60,6 @@ __all__ = ["MultibodyModel", "flank_geometry"]
 ENGAGED_TOLERANCE = 0.002
 #: the driver is "at rest" below this speed [rad/s]; velocity_ratio is then the geometric one
 REST_SPEED = 1e-3
-#: communication steps are split into chunks of at most this many fixed steps for the compiled
-#: loop (the inputs are interpolated by a cubic Hermite within a chunk)
-CHUNK_STEPS = 64
 #: stretch [m] over which a link's damper engages (Hunt-Crossley: the damping force grows with
 #: the contact, so it does not jump when a slack link snaps taut); 1 um is 51 N on xu2010's links
 DAMPING_ONSET = 1e-6
@@ -87,6 +85,10 @@ def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[floa
         return math.pi / 2, 0.0, 0.0
     gamma = seating_angle / 2 - math.pi / (4 * teeth)
     return gamma, math.pi / 2 - gamma, pitch * (0.5625 - 0.4 / teeth)
+
+
+#: settled static tensions per (drive, parameters): a scene's every run asks for the same one
+_STATIC_CACHE: dict = {}
 
 
 class MultibodyModel(Model):
@@ -157,7 +159,6 @@ class MultibodyModel(Model):
                                [self._mid_lower.real, self._mid_lower.imag]])
         self._spans_out = np.zeros((2, 3), np.int64)
         self._out14 = np.zeros(len(K.OUTPUT_NAMES))
-        self._verified = None
         self._engaged_tol = clearance + ENGAGED_TOLERANCE * pitch
 
     # --- state -----------------------------------------------------------------------------
@@ -188,9 +189,12 @@ class MultibodyModel(Model):
         d = self.drive
         phi2_k = float(driven_rotation(d, driver_angle).driven_angle)
 
+        G = geometry_constants(d)
+
         def unequal(phi2):
-            g = chain_geometry(d, np.array([driver_angle]), np.array([phi2]))
-            return float(g.upper.length[0] / g.upper_links[0] - g.lower.length[0] / g.lower_links[0])
+            # the scalar compiled twin of chain_geometry (levels 0-2's kernel)
+            g = span_geometry(float(driver_angle), float(phi2), G)
+            return g[0] / g[3] - g[9] / g[12]
 
         a_o = math.pi / d.n_driven
         f0 = unequal(phi2_k)
@@ -232,8 +236,6 @@ class MultibodyModel(Model):
         """SimulationDiverged when a link leaves [0.5, 1.5] pitches or the state is not finite,
         with the cause: a chain too soft for its tension (most links stretched by a tenth of a
         pitch or more: the stiffness, not the step, is at fault) or a diverging integration."""
-        if x is self._verified:
-            return
         if not np.all(np.isfinite(x)):
             raise SimulationDiverged(
                 f"multibody model diverged at t = {t:.6g} s (non-finite state); try a smaller "
@@ -263,46 +265,100 @@ class MultibodyModel(Model):
             f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
             "pitches while the rest of the chain is not stretched; try a smaller solver.step")
 
-    def advance_compiled(self, method, t0, t1, x, h, source):
-        """The fixed-step loop of :mod:`chainmodel.integrate` (``verlet`` exactly as
-        ``Verlet._step``, ``rk4`` as ``RK4._step``) compiled with numba over one communication
-        step; None (use the Python loop) without numba. Inputs inside a chunk of at most
-        CHUNK_STEPS steps come from a cubic Hermite through the chunk ends' angle and speed
-        (exact for the held and ramp profiles). Returns (x, steps, events, evaluations, [])."""
-        if not self.use_numba or method not in ("verlet", "rk4"):
+    # --- compiled stepping (multibody_kernels, numba) ------------------------------------
+    #: fixed-step methods with a compiled loop: advance_points / advance_held
+    compiled_methods = ("verlet", "rk4")
+    #: the automatic step is the stability bound of the current state (90 % of it, the
+    #: stable-step guard re-estimating it every communication step); solver.tolerance is not
+    #: used: the bound comes from the stiff roller-seat and link modes, and at that step the
+    #: outputs are converged well below it (docs/numerics.md, level 3)
+    tolerance_applies = False
+
+    def _compiled(self, method) -> bool:
+        return self.use_numba and method in self.compiled_methods
+
+    def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
+                       out, states, log, log_cap):
+        """The fixed-step loop of ``method`` (verlet exactly as ``Verlet._step``, rk4 as
+        ``RK4._step``) through the communication points ``times`` in one compiled call, with
+        the outputs at every point (multibody_kernels._advance_points_loops); None without
+        numba. Inputs inside a communication step: a cubic Hermite through its ends' angle and
+        speed (exact for held inputs and the scene ramps)."""
+        if not self._compiled(method):
             return None
-        code = 0 if method == "verlet" else 1
-        n = max(1, math.ceil((t1 - t0) / h - 1e-9))
-        hh = (t1 - t0) / n
-        x = np.array(x, float)
-        done = 0
-        u0 = source(t0)  # inputs may change at a communication point (FMU): never reuse u1
-        while done < n:
-            m = min(CHUNK_STEPS, n - done)
-            ta = t0 + done * hh
-            tb = t0 + (done + m) * hh if done + m < n else t1
-            u1 = source(tb)
-            bad = K.run_fixed_numba(code, x, ta, hh, m, ta, tb - ta, u0.angle, u0.speed,
-                                    u1.angle, u1.speed, u0.torque, u1.torque, self.P, self.ws)
-            if bad >= 0:
-                tb = ta + (bad + 1) * hh
-                self.check(tb, x)
-                raise SimulationDiverged(f"multibody model diverged at t = {tb:.6g} s "
-                                         f"(non-finite forces); try a smaller solver.step")
-            done += m
-            u0 = u1
-        self._verified = x  # the compiled loop checked every link and coordinate of this state
-        evals = n * (2 if code == 0 else 4)
-        return x, n, 0, evals, []
+        res = K.advance_points_numba(0 if method == "verlet" else 1, x_in, x_out, times, angle,
+                                     speed, acceleration, torque, self.P, self._omega_constants,
+                                     self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
+                                     self.drive.tooth_ratio, self._spans_out, out, states)
+        if out.shape[0] and res[1] == 0:
+            rows = slice(1, times.shape[0])
+            self._ratio_at_rest(out[rows], angle[rows], speed[rows])
+        return res
+
+    def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque, cfg,
+                     out, log):
+        """:meth:`advance_points` over one communication step with the inputs held first-order
+        (the FMU's hold), outputs at t1 in out[1]; None without numba."""
+        if not self._compiled(method):
+            return None
+        res = K.advance_held_numba(0 if method == "verlet" else 1, x_in, x_out, t0, t1, angle,
+                                   speed, acceleration, torque, self.P, self._omega_constants,
+                                   self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
+                                   self.drive.tooth_ratio, self._spans_out, out)
+        if res[1] == 0 and abs(out[1, 1]) < REST_SPEED:
+            self._ratio_at_rest(out[1:2], np.array([angle + speed * (t1 - t0)]),
+                                np.array([speed]))
+        return res
+
+    def _bounded(self, cfg: np.ndarray) -> np.ndarray:
+        """The step rule ``cfg`` with its outer bound lowered to :meth:`event_step` (which does
+        not depend on the speed at this level): what the Python loop does, for the compiled
+        one."""
+        h_event = self.__dict__.get("_h_event")
+        if h_event is None:
+            h_event = self._h_event = self.event_step(0.0)
+        if not h_event < cfg[K.CF_MAX]:
+            return cfg
+        buf = self.__dict__.get("_cfg_buf")
+        if buf is None:
+            buf = self._cfg_buf = np.empty_like(cfg)
+        buf[:] = cfg
+        buf[K.CF_MAX] = h_event
+        return buf
+
+    def _ratio_at_rest(self, rows, angle, speed) -> None:
+        """velocity_ratio of the rows whose driver is at rest (|speed| < REST_SPEED): the exact
+        four-bar ratio at the driver's angle (level 0), as :meth:`outputs` reports it."""
+        rest = np.abs(rows[:, 1]) < REST_SPEED
+        if not rest.any():
+            return
+        for rev in (False, True):
+            sel = rest & ((np.asarray(speed) < 0) == rev)
+            if sel.any():
+                rows[sel, 9] = driven_rotation(self.drive, rows[sel, 0], reverse=rev).velocity_ratio
+
+    def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
+        """Every output (ALL_OUTPUTS order) into ``out``: one compiled call with numba."""
+        if not self.use_numba:
+            return super().outputs_into(t, x, angle, speed, acceleration, torque, out)
+        K.outputs_numba(x, angle, speed, acceleration, torque, self.P, self.ws, self._mids,
+                        self._engaged_tol, speed < 0, self.drive.tooth_ratio, self._spans_out,
+                        out)
+        if abs(out[1]) < REST_SPEED:
+            self._ratio_at_rest(out.reshape(1, -1), np.array([angle]), np.array([speed]))
+
+    def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
+        return self.omega_max(x)
 
     # --- capabilities ----------------------------------------------------------------------
     def omega_max(self, x=None) -> float:
         """Upper bound of the highest natural frequency [rad/s] (Gershgorin on the
         mass-normalised tangent stiffness; derivation in docs/multibody.md), raised to the
-        damping rate (4 c + c_c + 16 c_j / p^2) / m if that is larger."""
-        p, d = self.params, self.drive
-        m, k = p["chain.link_mass"], p["chain.link_stiffness"]
-        kc = p["contact.stiffness"]
+        damping rate (4 c + c_c + 16 c_j / p^2) / m if that is larger. With a state x the links
+        count with their current stiffness max(k, |T| / L) (the guard of the compiled loop,
+        multibody_kernels._omega_loops, computes the same)."""
+        p = self.params
+        k = p["chain.link_stiffness"]
         k_link = k
         if x is not None:
             n = 2 + 2 * self.M
@@ -311,21 +367,32 @@ class MultibodyModel(Model):
             if np.all(np.isfinite(L)) and np.all(L > 0):
                 tension = k * (L - self.P[K.I_L0])
                 k_link = max(k, float(np.max(np.abs(tension) / L)))
-        w2 = 0.0
+        om = self._omega_constants
+        return max(math.sqrt(max(om[0] * k_link + om[1], om[2])), om[3])
+
+    @cached_property
+    def _omega_constants(self) -> np.ndarray:
+        """[4 / m, k_c / m + the larger seat coupling, the larger sprocket term, the damping
+        rate] of :meth:`omega_max`: a roller's w^2 is (4 k_link + k_c) / m + k_c r /
+        sqrt(m I) (r = R + tip) for the sprocket it touches, a sprocket's (extra + z k_c r^2) /
+        I + z k_c r / sqrt(m I) with z = min(teeth, M) seats and extra the shaft stiffness."""
+        p, d = self.params, self.drive
+        m = p["chain.link_mass"]
+        kc = p["contact.stiffness"]
+        roller, sprocket = 0.0, 0.0
         for teeth, R, tip, inertia, extra in (
                 (d.n_driver, d.driver.pitch_radius, self.P[K.I_TIP1], p["driver.inertia"],
                  p["input_shaft.stiffness"]),
                 (d.n_driven, d.driven.pitch_radius, self.P[K.I_TIP2], p["driven.inertia"], 0.0)):
             r = R + tip
             coupling = kc * r / math.sqrt(m * inertia)
-            roller = (4 * k_link + kc) / m + coupling
             seats = min(teeth, self.M)
-            sprocket = (extra + seats * kc * r * r) / inertia + seats * coupling
-            w2 = max(w2, roller, sprocket)
+            roller = max(roller, kc / m + coupling)
+            sprocket = max(sprocket, (extra + seats * kc * r * r) / inertia + seats * coupling)
         # joint dampers act through 1/L^2 lever arms on up to 4 joints of a roller's two links
         damping_rate = (4 * p["chain.link_damping"] + p["contact.damping"]
                         + 16 * p["chain.joint_damping"] / d.pitch ** 2) / m
-        return max(math.sqrt(w2), damping_rate)
+        return np.array([4.0 / m, roller, sprocket, damping_rate])
 
     def stable_step(self, x: np.ndarray) -> float:
         return 1.0 / self.omega_max(x)
@@ -390,6 +457,14 @@ class MultibodyModel(Model):
 
     @cached_property
     def _static(self) -> tuple[float, float, float]:
+        key = (self.drive, tuple(sorted(self.params.items())), self.use_numba)
+        if key not in _STATIC_CACHE:
+            if len(_STATIC_CACHE) > 64:
+                _STATIC_CACHE.clear()
+            _STATIC_CACHE[key] = self._settle()
+        return _STATIC_CACHE[key]
+
+    def _settle(self) -> tuple[float, float, float]:
         relax = dict(self.params)
         m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
         relax["chain.link_damping"] = max(relax["chain.link_damping"], 0.25 * math.sqrt(k * m))

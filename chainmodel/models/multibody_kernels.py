@@ -575,6 +575,129 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     return status
 
 
+def _omega_loops(q, P, OM):
+    """Highest natural frequency bound [rad/s] of the positions q (MultibodyModel.omega_max,
+    whose constant parts are OM = [4 / m, kc / m + largest seat coupling, largest sprocket
+    term, damping rate]): the link term takes the stiffest link, k or |k (L - l0)| / L."""
+    M = (q.shape[0] - 2) // 2
+    k = P[I_K]
+    l0 = P[I_L0]
+    k_link = k
+    for i in range(M):
+        j = i + 1
+        if j == M:
+            j = 0
+        dx = q[2 + 2 * j] - q[2 + 2 * i]
+        dy = q[3 + 2 * j] - q[3 + 2 * i]
+        L = math.sqrt(dx * dx + dy * dy)
+        if L > 0.0:
+            kl = abs(k * (L - l0)) / L
+            if kl > k_link:
+                k_link = kl
+    w2 = OM[0] * k_link + OM[1]
+    if OM[2] > w2:
+        w2 = OM[2]
+    w = math.sqrt(w2)
+    if OM[3] > w:
+        w = OM[3]
+    return w
+
+
+#: step rule vector (chainmodel.integrate.FixedStepper.cfg): explicit step, the tolerance's
+#: h omega (not used at level 3), safety times the stability limit, the limit, an outer bound
+CF_STEP, CF_THETA, CF_STAB, CF_LIMIT, CF_MAX = range(5)
+
+
+def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg,
+                          acc1, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle,
+                          scr, mids, tol, tooth_ratio, spans, OUT, states):
+    """The fixed-step loop (:func:`_run_fixed_loops`, method 0 Verlet, 1 RK4) through the
+    communication points ``times`` with the inputs given there (cubic Hermite through each
+    step's ends, linear load), x_in untouched, the state at the last point reached in x_out.
+    Each communication step H is split into ceil(H / h_max) equal steps, h_max from the state at
+    its start (the stable-step guard): an explicit step cfg[CF_STEP], refused when its h omega
+    exceeds the stability limit, or min(safety * limit / omega, cfg[CF_MAX]). OUT[i] receives
+    the outputs (OUTPUT_NAMES order) at times[i] for i >= 1 if OUT has rows, states[i] the state
+    if states has rows.
+
+    Returns (reached, status, steps, events, evaluations, logged, t_status, omega) as
+    chainmodel.models.rk4_loop.advance_points: status 0 fine, 1 diverged (a link outside
+    [l_min, l_max] or non-finite forces, after the step ending at t_status), 2 an explicit step
+    above the stable limit of the state at t_status (omega its frequency bound), 4 a
+    non-finite output at t_status (its row filled)."""
+    n = x_in.shape[0]
+    nq = n // 2
+    x = x_out
+    for j in range(n):
+        x[j] = x_in[j]
+    want_out = OUT.shape[0] > 0
+    want_states = states.shape[0] > 0
+    if want_states:
+        for j in range(n):
+            states[0, j] = x[j]
+    per_step = 2 if method == 0 else 4
+    steps = 0
+    evals = 0
+    for i in range(1, times.shape[0]):
+        t0 = times[i - 1]
+        H = times[i] - t0
+        w = _OMEGA(x[:nq], P, OM)
+        if cfg[CF_STEP] > 0.0:
+            if cfg[CF_STEP] * w > cfg[CF_LIMIT]:
+                return i - 1, 2, steps, 0, evals, 0, t0, w
+            h_max = cfg[CF_STEP]
+        else:
+            h_max = min(cfg[CF_STAB] / w, cfg[CF_THETA] / w, cfg[CF_MAX])
+        m = max(1, int(math.ceil(H / h_max - 1e-9)))
+        hh = H / m
+        bad = _RUN(method, x, t0, hh, m, t0, H, angle[i - 1], speed[i - 1], angle[i], speed[i],
+                   load[i - 1], load[i], P, acc1, acc2, k1, k2, k3, k4, xt, tension, fcon, side,
+                   dist, seat_angle, scr)
+        if bad >= 0:
+            return i - 1, 1, steps + bad + 1, 0, evals + (bad + 1) * per_step, 0, \
+                t0 + (bad + 1) * hh, 0.0
+        steps += m
+        evals += m * per_step
+        if want_states:
+            for j in range(n):
+                states[i, j] = x[j]
+        if want_out:
+            _OUT(x, angle[i], speed[i], acc[i], load[i], P, acc1, tension, fcon, side, dist,
+                 seat_angle, scr, mids, tol, speed[i] < 0.0, tooth_ratio, spans, OUT[i])
+            evals += 1
+            for k in range(OUT.shape[1]):
+                if not math.isfinite(OUT[i, k]):
+                    return i - 1, 4, steps, 0, evals, 0, times[i], 0.0
+    return times.shape[0] - 1, 0, steps, 0, evals, 0, times[-1], 0.0
+
+
+def _advance_held_loops(method, x_in, x_out, t0, t1, a0, w0, accel, ld, P, OM, cfg, acc1, acc2,
+                        k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle, scr, mids, tol,
+                        tooth_ratio, spans, OUT):
+    """One communication step with the inputs held first-order (angle a0 + w0 (t - t0); speed,
+    acceleration and load held): :func:`_advance_points_loops` on the two points, outputs at t1
+    in OUT[1]."""
+    times = np.empty(2)
+    angle = np.empty(2)
+    speed = np.empty(2)
+    acc = np.empty(2)
+    load = np.empty(2)
+    times[0] = t0
+    times[1] = t1
+    angle[0] = a0
+    angle[1] = a0 + w0 * (t1 - t0)
+    speed[0] = w0
+    speed[1] = w0
+    acc[0] = accel
+    acc[1] = accel
+    load[0] = ld
+    load[1] = ld
+    states = np.empty((0, x_in.shape[0]))
+    return _POINTS(method, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg, acc1, acc2,
+                   k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle, scr, mids, tol,
+                   tooth_ratio, spans, OUT, states)
+
+
 if HAVE_NUMBA:  # pragma: no branch
     # numba resolves the loop's callees by their global names at compile time
     _ACCEL = njit(_accel_loops)
@@ -583,9 +706,16 @@ if HAVE_NUMBA:  # pragma: no branch
     _ENGAGED = njit(_engaged_loops)
     _SPANS = njit(_spans_loops)
     _outputs_jit = njit(_outputs_loops)
+    _RUN = _run_fixed_jit
+    _OUT = _outputs_jit
+    _OMEGA = njit(_omega_loops)
+    _POINTS = njit(_advance_points_loops)
+    _HELD = njit(_advance_held_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
     _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit, _ENGAGED = (
         _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops, _engaged_loops)
+    _RUN, _OUT, _OMEGA, _POINTS, _HELD = (_run_fixed_loops, _outputs_loops, _omega_loops,
+                                          _advance_points_loops, _advance_held_loops)
 spans_numba = _SPANS
 _accel_jit = _ACCEL
 
@@ -634,6 +764,23 @@ def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1
                               float(a0), float(w0), float(a1), float(w1), float(L0), float(L1),
                               P, ws.acc, ws.acc2, k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon,
                               ws.side, ws.dist, ws.seat_angle, ws.scr))
+
+
+def advance_points_numba(method: int, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg,
+                         ws: Workspace, mids, tol, tooth_ratio, spans, OUT, states):
+    k1, k2, k3, k4 = ws.k
+    return _POINTS(method, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg, ws.acc,
+                   ws.acc2, k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon, ws.side, ws.dist,
+                   ws.seat_angle, ws.scr, mids, float(tol), float(tooth_ratio), spans, OUT,
+                   states)
+
+
+def advance_held_numba(method: int, x_in, x_out, t0, t1, a0, w0, acc, load, P, OM, cfg,
+                       ws: Workspace, mids, tol, tooth_ratio, spans, OUT):
+    k1, k2, k3, k4 = ws.k
+    return _HELD(method, x_in, x_out, t0, t1, a0, w0, acc, load, P, OM, cfg, ws.acc, ws.acc2,
+                 k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle,
+                 ws.scr, mids, float(tol), float(tooth_ratio), spans, OUT)
 
 
 # --- vectorised numpy kernel (fallback) -------------------------------------------------------

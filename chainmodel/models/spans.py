@@ -20,7 +20,8 @@ the driven sprocket.
 
 Layout of the constant vectors (built by :func:`geometry_constants` and the models):
 
-``G`` (geometry): theta4s, theta2s, alpha_c, alpha_o, R_c, R_o, x_c, y_c, theta1, n_c, n_o, N, M.
+``G`` (geometry): theta4s, theta2s, alpha_c, alpha_o, R_c, R_o, x_c, y_c, theta1, n_c, n_o, N, M,
+then the seat-direction tables of both sprockets (:func:`geometry_constants`).
 """
 
 from __future__ import annotations
@@ -58,64 +59,84 @@ except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
 
 
 def geometry_constants(drive) -> np.ndarray:
-    """The constant vector ``G`` of a drive (module docstring)."""
+    """The constant vector ``G`` of a drive (module docstring), followed by the seat-direction
+    tables cos(2 pi j / n), sin(2 pi j / n) of the driver (j < n_driver) and of the driven
+    sprocket: seat positions by the angle-sum formula, without trigonometry per seat."""
     from ..kinematics import fourbar as fb
     s = fb.seating(drive)
     m = -1 if drive.links is None else drive.links
-    return np.array([s.theta4, s.theta2, math.pi / drive.n_driver, math.pi / drive.n_driven,
+    head = np.array([s.theta4, s.theta2, math.pi / drive.n_driver, math.pi / drive.n_driven,
                      drive.driver.pitch_radius, drive.driven.pitch_radius, drive.x_c, drive.y_c,
                      drive.centre_angle, drive.n_driver, drive.n_driven, drive.span_pitches, m],
                     float)
+    tables = []
+    for n in (drive.n_driver, drive.n_driven):
+        j = np.arange(n)
+        tables += [np.cos(2 * np.pi * j / n), np.sin(2 * np.pi * j / n)]
+    return np.concatenate([head] + tables)
 
 
 @jit
-def _span(cfx, cfy, rf, af, phf, ctx, cty, rt, at, pht, dir0):
+def _seat(cx, cy, r, cph, sph, G, table, n, j):
+    """Position of seat j (cos and sin of its angle phase + 2 pi j / n too) of a sprocket at
+    (cx, cy) with pitch radius r, cph and sph the cosine and sine of its phase; ``table`` the
+    offset of its cos/sin table in G."""
+    k = int(j) % n
+    c = cph * G[table + k] - sph * G[table + n + k]
+    s = sph * G[table + k] + cph * G[table + n + k]
+    return cx + r * c, cy + r * s, c, s
+
+
+@jit
+def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, spt, tt, nt, dir0,
+          G):
     """One straight span between two sprockets (scalar form of wrapping._span).
+
+    The endpoints are the fixed point of the window condition: seats j from a direction, the
+    direction from those seats, until the seats repeat (usually at the first check). Within
+    about _EDGE (seat units) before an event the tolerant window flips between two candidate
+    endpoints; after seven checks the strict window decides (as wrapping._span does).
 
     Returns (length, arm_from, arm_to, j_from, j_to, u_from, u_to, ang_from, ang_to, direction),
     u the un-floored seat coordinates whose integer crossings are the release (from) and
     seating (to) events."""
-    d = dir0
-    jf_old = -1.0e300
-    jt_old = -1.0e300
-    jf = 0.0
-    jt = 0.0
-    angf = 0.0
-    angt = 0.0
     edge = _EDGE
-    for it in range(16):
-        if it == 8:
-            # Within about _EDGE (seat units) before an event the tolerant window flips between
-            # the two candidate endpoints; the strict window settles there (as wrapping._span).
+    d = dir0
+    jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
+    jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+    ax = ay = bx = by = cf = sf = ct = st = 0.0
+    settled = False
+    for it in range(14):
+        if it == 7:
             edge = 0.0
-            d = dir0
-            jf_old = -1.0e300
-            jt_old = -1.0e300
-        jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
-        jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
-        angf = phf + 2.0 * af * jf
-        angt = pht + 2.0 * at * jt
-        ax = cfx + rf * math.cos(angf)
-        ay = cfy + rf * math.sin(angf)
-        bx = ctx + rt * math.cos(angt)
-        by = cty + rt * math.sin(angt)
+            jf = math.floor((dir0 + _HALF_PI + af - phf) / (2.0 * af))
+            jt = math.floor((dir0 + _HALF_PI + at - pht) / (2.0 * at))
+        ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
+        bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        nd = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
-        if jf == jf_old and jt == jt_old:
-            d = nd
+        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        jf2 = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
+        jt2 = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+        if jf2 == jf and jt2 == jt:
+            settled = True
             break
-        jf_old = jf
-        jt_old = jt
-        d = nd
-    ax = cfx + rf * math.cos(angf)
-    ay = cfy + rf * math.sin(angf)
-    bx = ctx + rt * math.cos(angt)
-    by = cty + rt * math.sin(angt)
-    length = math.hypot(bx - ax, by - ay)
+        jf = jf2
+        jt = jt2
+    if not settled:
+        ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
+        bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
+        nd = math.atan2(by - ay, bx - ax)
+        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+    dx = bx - ax
+    dy = by - ay
+    length = math.hypot(dx, dy)
+    # arms r sin(angle - direction), the direction's cosine and sine from the span vector
+    cd = dx / length
+    sd = dy / length
     uf = (d + _HALF_PI + af - phf) / (2.0 * af)
     ut = (d + _HALF_PI + at - pht) / (2.0 * at)
-    return (length, rf * math.sin(angf - d), rt * math.sin(angt - d), jf, jt, uf, ut, angf,
-            angt, d)
+    return (length, rf * (sf * cd - cf * sd), rt * (st * cd - ct * sd), float(jf), float(jt), uf,
+            ut, phf + 2.0 * af * jf, pht + 2.0 * at * jt, d)
 
 
 @jit
@@ -142,12 +163,22 @@ def span_geometry(phi1, phi2, G):
     n_o = G[10]
     n_span = G[11]
     m_links = G[12]
+    nc = int(n_c)
+    no = int(n_o)
+    tc = G_SIZE                 # the driver's cos/sin table
+    to = G_SIZE + 2 * nc        # the driven sprocket's
     ph_c = th4s - phi1
     ph_o = th2s - phi2
-    (lu, aus, aue, jus, jue, uus, uue, gus, gue, du) = _span(0.0, 0.0, r_o, a_o, ph_o, xc, yc, r_c,
-                                                             a_c, ph_c, 0.0)
-    (ll, als, ale, jls, jle, uls, ule, gls, gle, dl) = _span(xc, yc, r_c, a_c, ph_c, 0.0, 0.0, r_o,
-                                                             a_o, ph_o, math.pi + 2.0 * th1)
+    cpc = math.cos(ph_c)
+    spc = math.sin(ph_c)
+    cpo = math.cos(ph_o)
+    spo = math.sin(ph_o)
+    (lu, aus, aue, jus, jue, uus, uue, gus, gue, du) = _span(0.0, 0.0, r_o, a_o, ph_o, cpo, spo, to,
+                                                             no, xc, yc, r_c, a_c, ph_c, cpc, spc,
+                                                             tc, nc, 0.0, G)
+    (ll, als, ale, jls, jle, uls, ule, gls, gle, dl) = _span(xc, yc, r_c, a_c, ph_c, cpc, spc, tc,
+                                                             nc, 0.0, 0.0, r_o, a_o, ph_o, cpo,
+                                                             spo, to, no, math.pi + 2.0 * th1, G)
     j_lc = jls - n_c * math.floor((jls - jue + n_c - 1.0) / n_c)
     j_lo = jle - n_o * math.floor((jle - jus - 1.0) / n_o)
     wrapped_c = jue - j_lc
@@ -376,410 +407,6 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     aux[A_W1] = w1
     aux[A_N_UP] = nu
     aux[A_N_LOW] = nl
-
-
-# --- compiled fixed-step integration over one communication step -----------------------------
-# Inputs inside the step: the input-shaft angle as the cubic Hermite interpolant of the source's
-# (angle, speed) at both ends and its acceleration the interpolant's second derivative (or the
-# source's value when it is the same at both ends); the load torque linear between the ends.
-# That is exact for a held input (FMU) and for the scenes' ramp profiles whenever the ramp ends on
-# a communication point; the Python steppers sample the source itself.
-C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
-
-
-@jit
-def _inputs(t, c):
-    dt = c[C_DT]
-    s = (t - c[C_T0]) / dt
-    s2 = s * s
-    s3 = s2 * s
-    a0 = c[C_A0]
-    a1 = c[C_A1]
-    w0 = c[C_W0]
-    w1 = c[C_W1]
-    th = ((2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (3 * s2 - 2 * s3) * a1
-          + (s3 - s2) * dt * w1)
-    w = ((6 * s2 - 6 * s) / dt * a0 + (3 * s2 - 4 * s + 1) * w0 + (6 * s - 6 * s2) / dt * a1
-         + (3 * s2 - 2 * s) * w1)
-    if c[C_ACC0] == c[C_ACC1]:
-        acc = c[C_ACC0]     # held or constant: the source's own value
-    else:
-        acc = ((12 * s - 6) * a0 + (6 * s - 4) * dt * w0 + (6 - 12 * s) * a1
-               + (6 * s - 2) * dt * w1) / (dt * dt)
-    load = c[C_L0] + (c[C_L1] - c[C_L0]) * s
-    return th, w, acc, load
-
-
-@jit
-def _rhs_at(t, x, c, G, P, dx, aux):
-    th, w, acc, load = _inputs(t, c)
-    evaluate(x, th, w, acc, load, G, P, dx, aux)
-
-
-@jit
-def _rk4(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
-    _rhs_at(t, x, c, G, P, k1, aux)
-    _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out)
-
-
-@jit
-def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
-    """One RK4 step with k1 = f(t, x) already in ``k1`` (three new evaluations)."""
-    n = x.size
-    for i in range(n):
-        tmp[i] = x[i] + 0.5 * h * k1[i]
-    _rhs_at(t + 0.5 * h, tmp, c, G, P, k2, aux)
-    for i in range(n):
-        tmp[i] = x[i] + 0.5 * h * k2[i]
-    _rhs_at(t + 0.5 * h, tmp, c, G, P, k3, aux)
-    for i in range(n):
-        tmp[i] = x[i] + h * k3[i]
-    _rhs_at(t + h, tmp, c, G, P, k4, aux)
-    for i in range(n):
-        out[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-
-
-@jit
-def _switch(t, x, c, G, P, dx, aux, g):
-    _rhs_at(t, x, c, G, P, dx, aux)
-    for i in range(6):
-        g[i] = aux[A_G_UP + i]
-
-
-@jit
-def _changed(g, g0):
-    for i in range(g.size):
-        if g[i] * g0[i] < 0.0 and g[i] != 0.0 and g0[i] != 0.0:
-            return True
-    return False
-
-
-W_ROWS = 14     # work vectors of the state's size (see _rk4_interval)
-V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi, ga, gb
-
-# Event crossing, the same constants as chainmodel.integrate (tests check they agree): the root
-# tolerance on a dense output and the gap eta between the steps on either side of an event, both
-# relative to the step h (docs/reduced_models.md, "Numerics").
-EVENT_TOL = 1e-5
-EVENT_GAP = 1e-4
-
-
-@jit
-def _dense(x0, f0, x1, f1, H, s, out):
-    """Dense output at s of a step from (x0, f0) at 0 to (x1, f1) at H: the cubic Hermite
-    interpolant (an extrapolation for s > H); for H = 0 the line x0 + s f0."""
-    if H == 0.0:
-        for i in range(x0.size):
-            out[i] = x0[i] + s * f0[i]
-        return
-    th = s / H
-    th2 = th * th
-    th3 = th2 * th
-    a = 2.0 * th3 - 3.0 * th2 + 1.0
-    b = (th3 - 2.0 * th2 + th) * H
-    d = (th3 - th2) * H
-    for i in range(x0.size):
-        out[i] = a * x0[i] + b * f0[i] + (1.0 - a) * x1[i] + d * f1[i]
-
-
-@jit
-def _secant(lo, hi, glo, ghi, g0):
-    """Earliest secant root in [lo, hi] among the functions changed between g0 and ghi."""
-    best = 1.0e300
-    for i in range(6):
-        if ghi[i] * g0[i] < 0.0 and ghi[i] != 0.0 and g0[i] != 0.0:
-            den = glo[i] - ghi[i]
-            if den != 0.0:
-                r = lo + (hi - lo) * glo[i] / den
-                if r < best:
-                    best = r
-    if best == 1.0e300 or not math.isfinite(best):
-        return 0.5 * (lo + hi)
-    return min(max(best, lo), hi)
-
-
-@jit
-def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, aux, V):
-    """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the dense
-    output :func:`_dense` (x0, f0; x1, f1; H), g_lo and g_hi the functions at the ends: safeguarded
-    regula falsi (Illinois) to ``tol``, one evaluation per iteration. Returns (s, evaluations), s
-    the secant root in the final bracket (chainmodel.integrate.FixedStepper._locate)."""
-    gh = V[2]
-    gm = V[3]
-    glo = V[4]
-    flo = V[5]
-    fhi = V[6]
-    for i in range(6):
-        gh[i] = g_hi[i]
-        glo[i] = g_lo[i]
-        flo[i] = g_lo[i]
-        fhi[i] = g_hi[i]
-    side = 0
-    evals = 0
-    for _it in range(100):
-        if hi - lo <= tol:
-            break
-        mid = 1.0e300
-        for i in range(6):
-            if gh[i] * g0[i] < 0.0 and gh[i] != 0.0 and g0[i] != 0.0:
-                den = flo[i] - fhi[i]
-                if den != 0.0:
-                    r = lo + (hi - lo) * flo[i] / den
-                    if r < mid:
-                        mid = r
-        margin = 1e-3 * (hi - lo)
-        if mid == 1.0e300 or not math.isfinite(mid):
-            mid = 0.5 * (lo + hi)
-        elif mid < lo + margin:
-            mid = lo + margin
-        elif mid > hi - margin:
-            mid = hi - margin
-        _dense(x0, f0, x1, f1, H, mid, xm)
-        _switch(t + mid, xm, c, G, P, dx, aux, gm)
-        evals += 1
-        if _changed(gm, g0):
-            hi = mid
-            for i in range(6):
-                gh[i] = gm[i]
-                fhi[i] = gm[i]
-                if side == -1:
-                    flo[i] = 0.5 * flo[i]
-            side = -1
-        else:
-            lo = mid
-            for i in range(6):
-                glo[i] = gm[i]
-                flo[i] = gm[i]
-                if side == 1:
-                    fhi[i] = 0.5 * fhi[i]
-            side = 1
-    return _secant(lo, hi, glo, gh, g0), evals
-
-
-@jit
-def _cross(t, x, h, c, G, P, W, V, aux):
-    """The step [t, t + h] from ``x`` (f(t, x) in W[3]) over which a switching function changed
-    sign (plain step's end state and derivative in W[0], W[8], functions at both ends in V[0],
-    V[1]), redone across the first change (the algorithm of chainmodel.integrate.
-    FixedStepper._cross; docs/reduced_models.md, "Numerics"):
-
-    1. a first estimate s of the change on the step's cubic Hermite dense output;
-    2. one RK4 step to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
-       of every function (else s is searched again on the dense output of [t, t + sa]);
-    3. s located again on the dense output of the old side alone, (x, f) at t and at t + sa
-       extrapolated past sa - the plain step's end state straddled the kink, this does not;
-       if s ends up more than 4 eta past sa, back to 2;
-    4. across the change to sb = s + eta by the two one-sided slopes (the old side's f over
-       [sa, s], the new side's over [s, sb]), sb widened until its state is on the new side;
-    5. one RK4 step from sb to t + h, its first stage on the new side.
-
-    No RK4 stage straddles the kink (that costs an error of order jump * h / 6, first order in
-    h), and the crossing errs by order eta^2 f' + jump * (error of s). Leaves the state at t + h
-    in W[0], f there in W[8], the functions there in V[1]. Returns (s, evaluations)."""
-    n = x.size
-    xn = W[0]
-    xm = W[1]
-    xb = W[2]
-    k1 = W[3]
-    k2 = W[4]
-    k3 = W[5]
-    k4 = W[6]
-    tmp = W[7]
-    f1 = W[8]
-    xa = W[9]
-    fa = W[10]
-    xq = W[11]
-    fq = W[12]
-    fb = W[13]
-    g0 = V[0]
-    g1 = V[1]
-    ga = V[7]
-    gb = V[8]
-    tol = EVENT_TOL * h
-    eta = EVENT_GAP * h
-    s, evals = _locate(t, x, k1, xn, f1, h, 0.0, h, g0, g1, g0, tol, c, G, P, xm, tmp, aux, V)
-    sa = 0.0
-    for _pass in range(8):
-        # 2. to sa, on the old side
-        for _it in range(20):
-            sa = s - eta
-            if sa <= 0.0:
-                sa = 0.0
-                break
-            _rk4_from(t, x, sa, c, G, P, k1, k2, k3, k4, tmp, aux, xa)
-            _switch(t + sa, xa, c, G, P, fa, aux, ga)
-            evals += 4
-            if not _changed(ga, g0):
-                break
-            s, e = _locate(t, x, k1, xa, fa, sa, 0.0, sa, g0, ga, g0, tol, c, G, P, xm, tmp,
-                           aux, V)
-            evals += e
-        if sa == 0.0:
-            for i in range(n):
-                xa[i] = x[i]
-                fa[i] = k1[i]
-            for i in range(6):
-                ga[i] = g0[i]
-        # 3. on the old side's dense output, extrapolated past sa
-        sb = min(s + eta, h)
-        for _it in range(60):
-            _dense(x, k1, xa, fa, sa, sb, xm)
-            _switch(t + sb, xm, c, G, P, tmp, aux, gb)
-            evals += 1
-            if _changed(gb, g0) or sb >= h:
-                break
-            sb = min(sa + 2.0 * (sb - sa), h)
-        if not _changed(gb, g0):
-            break                      # no change on the extrapolation: keep the estimate
-        if sb - sa <= 4.0 * eta:
-            s = _secant(sa, sb, ga, gb, g0)
-        else:
-            s, e = _locate(t, x, k1, xa, fa, sa, sa, sb, ga, gb, g0, tol, c, G, P, xm, tmp,
-                           aux, V)
-            evals += e
-        if s - sa <= 4.0 * eta:
-            break
-    # 4. across the change by the one-sided slopes
-    if s < sa:
-        s = sa
-    eta_b = eta
-    sb = h
-    for _it in range(60):
-        sb = min(s + eta_b, h)
-        for i in range(n):
-            xq[i] = xa[i] + (sb - sa) * fa[i]
-        _rhs_at(t + sb, xq, c, G, P, fq, aux)
-        for i in range(n):
-            xb[i] = xa[i] + (s - sa) * fa[i] + (sb - s) * fq[i]
-        _switch(t + sb, xb, c, G, P, fb, aux, gb)
-        evals += 2
-        if _changed(gb, g0) or sb >= h:
-            break
-        eta_b *= 8.0
-    # 5. the rest of the step
-    if sb < h:
-        _rk4_from(t + sb, xb, h - sb, c, G, P, fb, k2, k3, k4, tmp, aux, xn)
-        _switch(t + h, xn, c, G, P, f1, aux, g1)
-        evals += 4
-    else:
-        for i in range(n):
-            xn[i] = xb[i]
-            f1[i] = fb[i]
-        for i in range(6):
-            g1[i] = gb[i]
-    return s, evals
-
-
-@jit
-def _rk4_interval(x, t0, n_steps, h, c, G, P, W, V, aux, log, log_at, log_cap):
-    """``n_steps`` RK4 steps of size h from (t0, x), in place on ``x``; a step over which a
-    switching function changes sign is redone across the change (:func:`_cross`). The first
-    ``log_cap`` located event times go to ``log[(log_at + k) % log.size]``. Stops after a step
-    that leaves a non-finite state. Returns (events, rhs_evaluations, finite)."""
-    n = x.size
-    xn = W[0]
-    k1 = W[3]
-    k2 = W[4]
-    k3 = W[5]
-    k4 = W[6]
-    tmp = W[7]
-    f1 = W[8]
-    g0 = V[0]
-    g1 = V[1]
-    evals = 0
-    events = 0
-    t = t0
-    _switch(t, x, c, G, P, k1, aux, g0)
-    evals += 1
-    finite = True
-    for _ in range(n_steps):
-        # k1 = f(t, x): the previous evaluation at this (t, x), the switch at the step end
-        _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
-        _switch(t + h, xn, c, G, P, f1, aux, g1)
-        evals += 4
-        if _changed(g1, g0):
-            s, e = _cross(t, x, h, c, G, P, W, V, aux)
-            evals += e
-            if events < log_cap:
-                log[(log_at + events) % log.size] = t + s
-            events += 1
-        t += h
-        for i in range(n):
-            x[i] = xn[i]
-            k1[i] = f1[i]
-        for i in range(6):
-            g0[i] = g1[i]
-        for i in range(n):
-            if not math.isfinite(x[i]):
-                finite = False
-        if not finite:
-            break
-    return events, evals, finite
-
-
-@jit
-def rk4_advance(x0, t0, n_steps, h, c, G, P, event_times):
-    """``n_steps`` RK4 steps of size h from (t0, x0) over one communication step (inputs ``c``,
-    see :func:`_inputs`). Returns (x, events, rhs_evaluations); located event times go to
-    ``event_times[:events]`` (as many as fit)."""
-    x = x0.copy()
-    W = np.empty((W_ROWS, x.size))
-    V = np.empty((V_ROWS, 6))
-    aux = np.empty(A_SIZE)
-    events, evals, _ = _rk4_interval(x, t0, n_steps, h, c, G, P, W, V, aux, event_times, 0,
-                                     event_times.size)
-    return x, events, evals
-
-
-@jit
-def rk4_advance_many(x0, times, steps, angle, speed, acc, load, G, P, states, log, log_cap):
-    """:func:`rk4_advance` over the communication steps [times[i-1], times[i]] one after the
-    other, with the inputs sampled at the communication points (angle, speed, acc, load: the
-    source's values at ``times``) and cubic Hermite inside each step exactly as
-    :meth:`~chainmodel.models.torsional.TorsionalModel.advance_compiled` builds them, so the
-    states are those of the per-point path. ``steps[i-1]`` RK4 steps in step i; ``states[i]``
-    receives the state at ``times[i]`` (``states[0] = x0``). At most ``log_cap`` event times
-    per communication step go to the ring buffer ``log`` (in order, from index 0).
-
-    Returns (reached, steps, events, rhs_evaluations, logged): ``reached`` is the index of the
-    last state written - len(times) - 1, or the first communication point with a non-finite
-    state (the loop stops there)."""
-    x = x0.copy()
-    W = np.empty((W_ROWS, x.size))
-    V = np.empty((V_ROWS, 6))
-    aux = np.empty(A_SIZE)
-    c = np.empty(10)
-    for j in range(x.size):
-        states[0, j] = x[j]
-    total = 0
-    events = 0
-    evals = 0
-    logged = 0
-    for i in range(1, times.size):
-        t0 = times[i - 1]
-        t1 = times[i]
-        c[C_T0] = t0
-        c[C_DT] = t1 - t0
-        c[C_A0] = angle[i - 1]
-        c[C_W0] = speed[i - 1]
-        c[C_A1] = angle[i]
-        c[C_W1] = speed[i]
-        c[C_ACC0] = acc[i - 1]
-        c[C_ACC1] = acc[i]
-        c[C_L0] = load[i - 1]
-        c[C_L1] = load[i]
-        m = steps[i - 1]
-        e, v, finite = _rk4_interval(x, t0, m, (t1 - t0) / m, c, G, P, W, V, aux, log, logged,
-                                     log_cap)
-        total += m
-        events += e
-        evals += v
-        logged += min(e, log_cap)
-        for j in range(x.size):
-            states[i, j] = x[j]
-        if not finite:
-            return i, total, events, evals, logged
-    return times.size - 1, total, events, evals, logged
 
 
 @jit

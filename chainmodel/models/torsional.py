@@ -42,15 +42,16 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from ..geometry import Drive
-from ..kinematics import driven_rotation
-from ..kinematics.wrapping import chain_geometry, tooth_period_samples
-from . import limits
+from ..kinematics.wrapping import tooth_period_geometry
+from . import rk4_loop as L
 from . import spans as S
-from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
-                   centrifugal_tension, quasi_static_extras)
+from . import limits
+from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .kinematic import seat_series_compliance, seat_stiffness, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
+
+OUTPUT_NAMES = tuple(o.name for o in ALL_OUTPUTS)
 
 #: names of the switching functions, in order
 SWITCH_NAMES = ("upper span slack", "lower span slack", "release from driven (upper span)",
@@ -86,6 +87,9 @@ class TorsionalModel(Model):
         self._dx = None
         self._cache_key = None
         self._cache = None
+        self._out_row = np.empty(len(OUTPUT_NAMES))
+        self._dx_row = np.empty(self.n_states)
+        self._aux_row = np.empty(S.A_SIZE)
 
     # --- construction ----------------------------------------------------------------------
     @cached_property
@@ -93,8 +97,7 @@ class TorsionalModel(Model):
         """Tooth-period means of the level-0 configuration: link counts, span lengths and
         directions (used for the constant chain-inertia matrix and the modal basis)."""
         d = self.drive
-        phi1 = tooth_period_samples(d, 100)
-        g = chain_geometry(d, phi1, driven_rotation(d, phi1).driven_angle)
+        g = tooth_period_geometry(d, 100)
         return {"n_up": float(np.mean(g.upper_links)), "n_low": float(np.mean(g.lower_links)),
                 "n_up_min": float(np.min(g.upper_links)),
                 "n_low_min": float(np.min(g.lower_links)),
@@ -199,70 +202,34 @@ class TorsionalModel(Model):
     def initial_state(self, u: Inputs) -> np.ndarray:
         """Rest, in static equilibrium under the load torque ``u.torque`` with the input shaft
         held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
-        balances the span tensions, found by bracketing from the level-0 configuration."""
-        from scipy.optimize import brentq
-
-        modal = self._modal_initial(u)
+        balances the span tensions, found by bracketing from the level-0 configuration
+        (:func:`chainmodel.models.equilibrium.static_state`, one compiled call)."""
+        from . import equilibrium as E
+        from .kinematic_kernel import driven_rotation as scalar_rotation
+        from .kinematic_kernel import fourbar_constants
         d = self.drive
-        a_o, a_c = math.pi / d.n_driven, math.pi / d.n_driver
-        phi2_kin = float(driven_rotation(d, u.angle).driven_angle)
-
-        def state(phi1, phi2):
-            if self.rigid:
-                return np.concatenate([[phi2, 0.0], modal])
-            return np.concatenate([[phi1, phi2, 0.0, 0.0], modal])
-
-        def acc2(phi1, phi2):
-            aux = self._kernel(state(phi1, phi2), phi1, 0.0, 0.0, u.torque)[1]
-            return aux[S.A_ACC2] if self.rigid else self._driven_torque(state(phi1, phi2), u)
-
-        def solve_driven(phi1):
-            centre = phi2_kin + (phi1 - u.angle) * d.tooth_ratio
-            lo, hi = centre - 0.5 * a_o, centre + 0.5 * a_o
-            flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
-            for _ in range(20):
-                if flo >= 0 >= fhi:
-                    break
-                lo, hi = lo - a_o, hi + a_o
-                flo, fhi = acc2(phi1, lo), acc2(phi1, hi)
-            else:
-                p = self.params
-                raise ValueError(
-                    f"no static equilibrium of the driven sprocket within 20 teeth of the "
-                    f"kinematic position under load.torque = {u.torque:g} N.m: the spans "
-                    f"(chain.link_stiffness = {p['chain.link_stiffness']:g} N/m per link, "
-                    f"static tension {self.static_tension():.4g} N) cannot carry "
-                    f"{abs(u.torque) / d.driven.pitch_radius:.4g} N of tension difference "
-                    "without stretching by more than that; use a stiffer chain or a smaller "
-                    "load")
-            if flo == 0.0:
-                return lo
-            if fhi == 0.0:
-                return hi
-            return brentq(lambda v: acc2(phi1, v), lo, hi, xtol=1e-15, rtol=1e-15)
-
-        if self.rigid:
-            return state(u.angle, solve_driven(u.angle))
-
-        k_s = self.params["input_shaft.stiffness"]
-
-        def shaft_residual(phi1):
-            phi2 = solve_driven(phi1)
-            x = state(phi1, phi2)
-            aux = self._kernel(x, u.angle, 0.0, 0.0, u.torque)[1]
-            return aux[S.A_ACC1]
-
-        lo, hi = u.angle - 0.5 * a_c, u.angle + 0.5 * a_c
-        for _ in range(20):
-            flo, fhi = shaft_residual(lo), shaft_residual(hi)
-            if flo >= 0 >= fhi:
-                break
-            lo, hi = lo - a_c, hi + a_c
-        else:  # pragma: no cover - the shaft spring always brackets
-            raise ValueError(f"no static equilibrium of the driver on input_shaft.stiffness "
-                             f"= {k_s:g} N.m/rad")
-        phi1 = brentq(shaft_residual, lo, hi, xtol=1e-15, rtol=1e-15)
-        return state(phi1, solve_driven(phi1))
+        modal = self._modal_initial(u)
+        x = np.concatenate([np.zeros(self.n_sprocket_states), modal])
+        K = self.__dict__.get("_fourbar_constants")
+        if K is None:
+            K = self.__dict__["_fourbar_constants"] = fourbar_constants(d)
+        phi2_kin = scalar_rotation(float(u.angle), 0.0, 0.0, False, K)[0]
+        status = E.static_state(float(u.angle), float(u.torque), phi2_kin, d.tooth_ratio,
+                                math.pi / d.n_driven, math.pi / d.n_driver, x, self.G, self.P)
+        if status == E.STATUS_NO_DRIVEN:
+            p = self.params
+            raise ValueError(
+                f"no static equilibrium of the driven sprocket within 20 teeth of the "
+                f"kinematic position under load.torque = {u.torque:g} N.m: the spans "
+                f"(chain.link_stiffness = {p['chain.link_stiffness']:g} N/m per link, "
+                f"static tension {self.static_tension():.4g} N) cannot carry "
+                f"{abs(u.torque) / d.driven.pitch_radius:.4g} N of tension difference "
+                "without stretching by more than that; use a stiffer chain or a smaller "
+                "load")
+        if status == E.STATUS_NO_DRIVER:  # pragma: no cover - the shaft spring always brackets
+            raise ValueError("no static equilibrium of the driver on input_shaft.stiffness "
+                             f"= {self.params['input_shaft.stiffness']:g} N.m/rad")
+        return x
 
     def _driven_torque(self, x, u):
         """Net static torque on the driven sprocket (flexible shaft, driver held)."""
@@ -271,48 +238,56 @@ class TorsionalModel(Model):
         # generalised force on the driven sprocket: J21 acc1 + J22 acc2
         return mm[S.P_J12] * aux[S.A_ACC1] + mm[S.P_J22] * aux[S.A_ACC2]
 
-    # --- compiled stepping ------------------------------------------------------------------
-    def advance_compiled(self, method, t0, t1, x, h, source):
-        """The RK4 loop of :class:`chainmodel.integrate.RK4` over one communication step in
-        compiled code (numba), or None when not available (other methods, no numba). Returns
-        (x, steps, events, rhs_evaluations, event_times)."""
-        if method != "rk4" or not S.NUMBA:
-            return None
-        n = max(1, math.ceil((t1 - t0) / h - 1e-9))
-        u0, u1 = source(t0), source(t1)
-        c = np.array([t0, t1 - t0, u0.angle, u0.speed, u1.angle, u1.speed, u0.acceleration,
-                      u1.acceleration, u0.torque, u1.torque], float)
-        times = np.empty(16)
-        x_new, events, evals = S.rk4_advance(np.asarray(x, float), float(t0), n, (t1 - t0) / n,
-                                             c, self.G, self.P, times)
-        return x_new, n, int(events), int(evals), list(times[:min(int(events), times.size)])
+    # --- compiled stepping (chainmodel.models.rk4_loop) -------------------------------------
+    #: fixed-step methods with a compiled loop (numba): advance_points / advance_held
+    compiled_methods: ClassVar[tuple[str, ...]] = ("rk4",)
 
-    #: event times kept per communication step by advance_compiled (and so by the batched path)
-    EVENTS_PER_STEP = 16
+    @cached_property
+    def loop_constants(self) -> np.ndarray:
+        """The constant vector Q of the compiled loop and outputs (rk4_loop.Q_*)."""
+        p, d = self.params, self.drive
+        Q = np.empty(L.Q_SIZE)
+        Q[L.Q_W_SPROCKET] = float(np.max(self.sprocket_frequencies()))
+        Q[L.Q_RATIO] = d.tooth_ratio
+        Q[L.Q_SAG] = (p["chain.link_mass"] / d.pitch) * p["gravity"] * math.cos(
+            p["drive.inclination"]) / 8.0
+        Q[L.Q_AMP_LIMIT] = self._amplitude_limit()
+        Q[L.Q_EVENT_ANGLE] = 0.25 * 2.0 * math.pi / d.n_driver
+        Q[L.Q_CENTRIFUGAL] = float(centrifugal_tension(d, p, 1.0))   # times w1^2
+        return Q
 
-    def advance_compiled_many(self, method, times, x, h, angle, speed, acceleration, torque,
-                              log_size=1000):
-        """:meth:`advance_compiled` over every communication step [times[i-1], times[i]] in one
-        compiled call, with the inputs given at the communication points (the source's values
-        there: what ``advance_compiled`` takes from it at each step's ends). The same steps,
-        inputs and arithmetic, so the same states as the per-point calls. None when not
-        available. Returns (states, reached, steps, events, rhs_evaluations, event_times):
-        ``states[i]`` at ``times[i]`` for i <= reached (reached < len(times) - 1 when a state
-        became non-finite), event_times the last ``log_size`` located events in order."""
-        if method != "rk4" or not S.NUMBA:
+    def _amplitude_limit(self) -> float:
+        return math.inf
+
+    def _compiled(self, method) -> bool:
+        return method in self.compiled_methods and S.NUMBA
+
+    def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
+                       out, states, log, log_cap):
+        """The fixed-step loop of ``method`` through the communication points ``times`` in one
+        compiled call (:func:`chainmodel.models.rk4_loop.advance_points`: step rule, guard,
+        events, outputs into ``out`` rows 1.., states into ``states``; x_in untouched, the
+        final state in x_out), or None when there is none (another method, no numba)."""
+        if not self._compiled(method):
             return None
-        times = np.ascontiguousarray(times, float)
-        steps = np.maximum(1, np.ceil(np.diff(times) / h - 1e-9)).astype(np.int64)
-        states = np.empty((times.size, self.n_states))
-        log = np.empty(log_size)
-        reached, n, events, evals, logged = S.rk4_advance_many(
-            np.asarray(x, float), times, steps, *(np.ascontiguousarray(a, float) for a in
-                                                   (angle, speed, acceleration, torque)),
-            self.G, self.P, states, log, self.EVENTS_PER_STEP)
-        if logged > log_size:
-            log = np.roll(log, -(logged % log_size))
-        return (states, int(reached), int(n), int(events), int(evals),
-                list(log[:min(int(logged), log_size)]))
+        return L.advance_points(x_in, x_out, times, angle, speed, acceleration, torque, self.G,
+                                self.P, self.loop_constants, cfg, out, states, log, log_cap)
+
+    def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque, cfg,
+                     out, log):
+        """:meth:`advance_points` over one communication step with the inputs held first-order
+        (the FMU's hold), outputs at t1 in out[1]; None when there is no compiled path."""
+        if not self._compiled(method):
+            return None
+        return L.advance_held(x_in, x_out, t0, t1, angle, speed, acceleration, torque, self.G,
+                              self.P, self.loop_constants, cfg, out, log)
+
+    def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
+        """Highest natural frequency of the state x [rad/s] (:func:`~chainmodel.models.rk4_loop.
+        omega_estimate`: the sprockets' bound; at level 2 also the span modes at their current
+        tension): the stable-step guard's estimate."""
+        aux = self._eval(t, np.asarray(x, float), u)[1]
+        return float(L.omega_estimate(aux, self.G, self.P, self.loop_constants))
 
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
@@ -398,91 +373,29 @@ class TorsionalModel(Model):
         d["chain.min_link_tension"] = QUASI_STATIC + "the smaller span tension"
         return d
 
-    def _midspan(self, aux, upper: bool, tight: float, tight_length: float) -> float:
-        """Scalar form of :func:`~chainmodel.models.base.quasi_static_extras`' sag (the numpy
-        version costs more than a whole compiled communication step)."""
-        p = self.params
-        rho = p["chain.link_mass"] / self.drive.pitch
-        g_n = p["gravity"] * math.cos(p["drive.inclination"])
-        if tight > 0.0:
-            return -min(rho * g_n * tight_length ** 2 / (8.0 * tight), tight_length / 2)
-        return -tight_length / 2
-
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
-        x = np.asarray(x, float)
-        dx, aux = self._eval(t, x, u)
-        t_up, t_low = float(aux[S.A_T_UP]), float(aux[S.A_T_LOW])
-        # the tight span carries the larger tension (ties: the one the driver winds on)
-        upper = t_up > t_low or (t_up == t_low and u.speed >= 0.0)
-        tight, slack = (t_up, t_low) if upper else (t_low, t_up)
-        length = float(aux[S.A_L_UP] if upper else aux[S.A_L_LOW])
-        phi1, w1 = float(aux[S.A_PHI1]), float(aux[S.A_W1])
-        centrifugal = float(centrifugal_tension(self.drive, self.params, w1))
-        if self.rigid:
-            phi2, w2 = float(x[0]), float(x[1])
-        else:
-            phi2, w2 = float(x[1]), float(x[3])
-        ratio = self.drive.tooth_ratio
-        out = {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
-               "driven.speed": w2, "driven.acceleration": float(aux[S.A_ACC2]),
-               "input_shaft.torque": float(aux[S.A_TAU_IN]),
-               "tight_span.tension": tight + centrifugal,
-               "slack_span.tension": slack + centrifugal,
-               "tight_span.length": length,
-               # at rest the instantaneous ratio is undefined; report the mean (tooth) ratio
-               "velocity_ratio": w2 / w1 if abs(w1) > 1e-9 else ratio,
-               "transmission_error": phi2 - ratio * phi1}
-        # sag and seat force from the effective tension (quasi_static_extras)
-        out["tight_span.midspan_deflection"] = self._midspan(aux, upper, tight, length)
-        out["chain.max_link_tension"] = max(tight, slack) + centrifugal
-        out["contact.max_force"] = tight
-        out["chain.min_link_tension"] = min(tight, slack) + centrifugal
-        return out
+        out = self._out_row
+        L.outputs_into(np.asarray(x, float), float(u.angle), float(u.speed),
+                       float(u.acceleration), float(u.torque), self.G, self.P,
+                       self.loop_constants, self._dx_row, self._aux_row, out)
+        return dict(zip(OUTPUT_NAMES, out.tolist()))
 
-    def _midspan_many(self, aux, upper, tight, tight_length) -> np.ndarray:
-        """:meth:`_midspan` for arrays of samples."""
-        p = self.params
-        rho = p["chain.link_mass"] / self.drive.pitch
-        g_n = p["gravity"] * math.cos(p["drive.inclination"])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            sag = rho * g_n * tight_length ** 2 / (8.0 * tight)
-        return np.where(tight > 0.0, -np.minimum(sag, tight_length / 2), -tight_length / 2)
+    def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
+        """Every output (ALL_OUTPUTS order) into ``out``, one compiled call; True when all are
+        finite."""
+        return L.outputs_into(x, float(angle), float(speed), float(acceleration), float(torque), self.G,
+                       self.P, self.loop_constants, self._dx_row, self._aux_row, out)
 
     def outputs_many(self, times, states, angle, speed, acceleration, torque
                      ) -> dict[str, np.ndarray]:
         """:meth:`outputs` at many samples at once: ``states[i]`` at ``times[i]`` with the inputs
-        (angle, speed, acceleration, torque)[i]; the same kernel and formulas, vectorised."""
+        (angle, speed, acceleration, torque)[i]; the same compiled function per sample."""
         states = np.ascontiguousarray(states, float).reshape(len(times), self.n_states)
-        speed = np.ascontiguousarray(speed, float)
-        aux = np.empty((states.shape[0], S.A_SIZE))
-        S.evaluate_many(states, np.ascontiguousarray(angle, float), speed,
-                        np.ascontiguousarray(acceleration, float),
-                        np.ascontiguousarray(torque, float), self.G, self.P, aux)
-        t_up, t_low = aux[:, S.A_T_UP], aux[:, S.A_T_LOW]
-        upper = (t_up > t_low) | ((t_up == t_low) & (speed >= 0.0))
-        tight = np.where(upper, t_up, t_low)
-        slack = np.where(upper, t_low, t_up)
-        length = np.where(upper, aux[:, S.A_L_UP], aux[:, S.A_L_LOW])
-        phi1, w1 = aux[:, S.A_PHI1].copy(), aux[:, S.A_W1].copy()
-        centrifugal = centrifugal_tension(self.drive, self.params, w1)
-        if self.rigid:
-            phi2, w2 = states[:, 0].copy(), states[:, 1].copy()
-        else:
-            phi2, w2 = states[:, 1].copy(), states[:, 3].copy()
-        ratio = self.drive.tooth_ratio
-        velocity_ratio = np.full(w1.shape, ratio)
-        np.divide(w2, w1, out=velocity_ratio, where=np.abs(w1) > 1e-9)
-        return {"driver.angle": phi1, "driver.speed": w1, "driven.angle": phi2,
-                "driven.speed": w2, "driven.acceleration": aux[:, S.A_ACC2].copy(),
-                "input_shaft.torque": aux[:, S.A_TAU_IN].copy(),
-                "tight_span.tension": tight + centrifugal,
-                "slack_span.tension": slack + centrifugal,
-                "tight_span.length": length, "velocity_ratio": velocity_ratio,
-                "transmission_error": phi2 - ratio * phi1,
-                "tight_span.midspan_deflection": self._midspan_many(aux, upper, tight, length),
-                "chain.max_link_tension": np.maximum(tight, slack) + centrifugal,
-                "contact.max_force": tight.copy(),
-                "chain.min_link_tension": np.minimum(tight, slack) + centrifugal}
+        OUT = np.empty((states.shape[0], len(OUTPUT_NAMES)))
+        L.outputs_many(states, *(np.ascontiguousarray(a, float) for a in
+                                 (angle, speed, acceleration, torque)),
+                       self.G, self.P, self.loop_constants, OUT)
+        return {name: OUT[:, k].copy() for k, name in enumerate(OUTPUT_NAMES)}
 
     def evaluate_states(self, times, states, inputs) -> dict[str, np.ndarray]:
         """Outputs for a sequence of (t, x, u) (convenience for post-processing); ``inputs`` a

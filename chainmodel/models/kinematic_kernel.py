@@ -1,0 +1,187 @@
+"""Scalar compiled evaluation of level 0 (the kinematic model) for one sample: what the FMU
+evaluates once per communication step, where the vectorised library functions cost tens of
+microseconds of numpy overhead for a single angle.
+
+It is the same computation, in the same order, as the vectorised path
+(:meth:`chainmodel.models.kinematic.KinematicModel.evaluate`):
+
+* :func:`driven_rotation` - seed 000 eqs 26-32 through the continuous rotations of
+  :func:`chainmodel.kinematics.driven_rotation` (driver contact angle and whole tooth periods,
+  the four-bar's driven angle, span angle, velocity ratio, speeds and accelerations; reverse
+  rotation by the mirror symmetry of :func:`chainmodel.kinematics.rotation.reverse_offset`);
+* both spans' moment arms from the scalar span geometry of :mod:`.spans` (the twin of
+  :func:`chainmodel.kinematics.wrapping.chain_geometry`);
+* the quasi-static tensions of :func:`chainmodel.models.kinematic.split_tensions`, the input
+  torque and :func:`chainmodel.models.base.quasi_static_extras`.
+
+tests/test_level0.py checks it against the vectorised library to 1e-12 over many angles, forward
+and reverse, compiled and plain Python (``.py_func``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .spans import jit, span_geometry
+
+__all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "K_SIZE", "C_SIZE"]
+
+# --- four-bar constants (fourbar_constants) -----------------------------------------------------
+(K_TH4S, K_TH2S, K_TH4R, K_TWO_AC, K_AO, K_R1, K_R2, K_R4, K_TH1, K_L, K_PITCH, K_REV_D,
+ K_REV_C) = range(13)
+K_SIZE = 13
+
+# --- level-0 constants (KinematicModel._kernel_constants) --------------------------------------
+#: driver inertia, driven inertia, driven damping, sum of the span tensions 2 T0, rho * g_n for
+#: the sag, tooth ratio n_driver / n_driven, centrifugal tension per (rad/s)^2 of the driver
+C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL = range(7)
+C_SIZE = 7
+
+_EVENT_TOL = 1e-12   # chainmodel.kinematics.fourbar._EVENT_TOL
+
+
+def fourbar_constants(drive) -> np.ndarray:
+    """The constant vector of :func:`driven_rotation` for ``drive``."""
+    from ..kinematics import fourbar as fb
+    from ..kinematics.rotation import reverse_offset
+    f = fb.fourbar(drive)
+    s, r = fb.seating(drive), fb.release(drive)
+    d, c = reverse_offset(drive)
+    return np.array([s.theta4, s.theta2, r.theta4, 2 * math.pi / drive.n_driver,
+                     math.pi / drive.n_driven, f.r1, f.r2, f.r4, f.theta1, f.L, f.pitch, d, c],
+                    float)
+
+
+@jit
+def _solve_trig(a, b, c, near):
+    """fourbar.solve_trig for one sample; nan when the linkage cannot be assembled."""
+    rho = math.hypot(a, b)
+    ratio = -c / rho
+    if abs(ratio) > 1.0 + 1e-12:
+        return math.nan
+    delta = math.atan2(b, a)
+    spread = math.acos(min(max(ratio, -1.0), 1.0))
+    two_pi = 2.0 * math.pi
+    plus = near + ((delta + spread - near + math.pi) % two_pi) - math.pi
+    minus = near + ((delta - spread - near + math.pi) % two_pi) - math.pi
+    if abs(minus - near) < abs(plus - near):
+        return minus
+    return plus
+
+
+@jit
+def _in_period(theta4, K):
+    return K[K_TH4S] - ((K[K_TH4S] - theta4) % K[K_TWO_AC])
+
+
+@jit
+def _forward(phi, w, a, K):
+    """rotation._forward for one sample: (phi2, speed2, acc2, velocity_ratio, span_length)."""
+    two_a = K[K_TWO_AC]
+    # driver_contact_angle
+    k = math.floor(phi / two_a)
+    raw = K[K_TH4S] - (phi - k * two_a)
+    t4 = _in_period(raw, K)
+    k = k - round((raw - t4) / two_a)
+    # fourbar.exact (which maps theta4 into the period once more)
+    t4 = _in_period(t4, K)
+    h = 1.0 if t4 < K[K_TH4R] - _EVENT_TOL else 0.0
+    r1 = K[K_R1]
+    r2 = K[K_R2]
+    r4 = K[K_R4]
+    t1 = K[K_TH1]
+    r3 = K[K_L] + h * K[K_PITCH]
+    cos4 = math.cos(t4)
+    sin4 = math.sin(t4)
+    ca = -2 * r1 * r2 * math.cos(t1) - 2 * r4 * r2 * cos4
+    cb = -2 * r1 * r2 * math.sin(t1) - 2 * r4 * r2 * sin4
+    cc = r1**2 + r4**2 + r2**2 - r3 ** 2 + 2 * r1 * r4 * math.cos(t1 - t4)
+    t2 = _solve_trig(ca, cb, cc, 0.5 * math.pi)
+    t3 = math.atan2(r1 * math.sin(t1) + r4 * sin4 - r2 * math.sin(t2),
+                    r1 * math.cos(t1) + r4 * cos4 - r2 * math.cos(t2))
+    s23 = math.sin(t2 - t3)
+    ratio = r4 * math.sin(t4 - t3) / (r2 * s23)
+    w4 = -w
+    a4 = -a
+    w2 = ratio * w4
+    w3 = w4 * r4 * math.sin(t2 - t4) / (r3 * s23)
+    a2 = a4 * ratio + (w4**2 * r4 * math.cos(t4 - t3) - w2**2 * r2 * math.cos(t2 - t3)
+                       - w3**2 * r3) / (r2 * s23)
+    phi2 = K[K_TH2S] - t2 + 2 * K[K_AO] * (k + h)
+    return phi2, -w2, -a2, ratio, r3
+
+
+@jit
+def driven_rotation(phi, w, a, reverse, K):
+    """chainmodel.kinematics.driven_rotation for one sample (forward, or reverse through the
+    mirror symmetry): (driven angle, driven speed, driven acceleration, velocity ratio,
+    tight-span length)."""
+    if not reverse:
+        return _forward(phi, w, a, K)
+    phi2, w2, a2, ratio, r3 = _forward(K[K_REV_D] - phi, -w, -a, K)
+    return K[K_REV_C] - phi2, -w2, -a2, ratio, r3
+
+
+@jit
+def level0_outputs(angle, speed, acc, torque, K, G, C, out):
+    """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
+    acc) and the load torque into ``out``: the tight span is the one with the larger tension
+    (ties: the upper span forward, the lower in reverse), and the reported span and link
+    tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
+    force not (KinematicModel.evaluate). True when every output is finite."""
+    rev = speed < 0.0
+    phi2, w2, a2, ratio, length = driven_rotation(angle, speed, acc, rev, K)
+    g = span_geometry(angle, phi2, G)
+    up_start = g[1]
+    up_end = g[2]
+    low_start = g[10]
+    low_end = g[11]
+    load = C[C_I2] * a2 + C[C_D2] * w2 + torque
+    # split_tensions(2 T0, upper arm_start, lower arm_end, load), in its order of operations
+    total = C[C_SUM]
+    t_up = (load + total * low_end) / (up_start + low_end)
+    t_low = total - t_up
+    if t_low < 0:
+        t_up = load / up_start
+        t_low = 0.0
+    if t_up < 0:
+        t_low = -load / low_end
+        t_up = 0.0
+    tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
+    if t_up > t_low or (t_up == t_low and not rev):
+        tight = t_up
+        slack = t_low
+        length = g[0]
+    else:
+        tight = t_low
+        slack = t_up
+        length = g[9]
+    centrifugal = C[C_CENTRIFUGAL] * speed * speed
+    out[0] = angle
+    out[1] = speed
+    out[2] = phi2
+    out[3] = w2
+    out[4] = a2
+    out[5] = tau_in
+    out[6] = tight + centrifugal
+    out[7] = slack + centrifugal
+    out[8] = length
+    out[9] = ratio
+    out[10] = phi2 - C[C_RATIO] * angle
+    # quasi_static_extras: static sag of the tight span, reported negative
+    sag = math.inf
+    if tight != 0.0:
+        sag = C[C_RHO_G] * length ** 2 / (8.0 * tight)
+    if tight > 0 and math.isfinite(sag):
+        out[11] = -min(sag, length / 2)
+    else:
+        out[11] = -(length / 2)
+    out[12] = max(tight, slack) + centrifugal
+    out[13] = tight
+    out[14] = min(tight, slack) + centrifugal
+    for k in range(out.shape[0]):
+        if not math.isfinite(out[k]):
+            return False
+    return True

@@ -1,0 +1,673 @@
+"""Compiled fixed-step RK4 of levels 1 (torsional) and 2 (modal): the internal step rule, the
+stable-step guard, the event crossing and the outputs, over one or many communication steps in
+one call (numba; plain Python with ``CHAINMODEL_NUMBA=0``, where
+:class:`chainmodel.integrate.FixedStepper` runs the same algorithm on the model interface
+instead - tests compare the two).
+
+**Inputs inside a communication step** [t0, t1]: the input-shaft angle is the cubic Hermite
+interpolant of the (angle, speed) given at both ends, its acceleration the interpolant's second
+derivative (or the given value when it is the same at both ends), the load torque linear. That is
+exact for inputs held first-order (the FMU: angle1 = angle0 + speed0 (t1 - t0), speed, torque
+and acceleration held) and for the scenes' ramp profiles whenever the ramp ends on a
+communication point.
+
+**Step rule** (docs/numerics.md). The internal step never depends on the communication step
+except that a communication step shorter than it is taken whole. With ``cfg`` from
+:meth:`chainmodel.integrate.FixedStepper.step_config`: an explicit ``solver.step`` is used as
+given; otherwise the step bound is
+
+    h_max = min(theta / w, safety * 2 sqrt(2) / w, max_step, quarter tooth period)
+
+with w the highest natural frequency of the *current* state (:func:`omega_estimate`: the
+sprockets' bound, and at level 2 each span's highest mode at its current tension), theta =
+(120 tol)^(1/4) the RK4 step at which the relative phase error of that mode is ``tol``
+(``solver.tolerance``), and the quarter tooth period at the larger input speed of the two ends of
+the communication step (four seating and release events per tooth period; a step crosses only
+the first event inside it). A communication step is split into m = ceil(H / h_max) equal steps;
+after every step w is estimated again from the step's end (the evaluation the next step starts
+with, so it costs nothing) and if the step now exceeds h_max the rest of the communication step
+is split again (the stable-step guard). An explicit step with h w above RK4's stability limit
+2 sqrt(2) is refused (status STATUS_UNSTABLE) instead.
+
+**Outputs** at each communication point come from the point's own inputs: the evaluation that
+ends the last step is reused when its inputs are those (held inputs), otherwise the kernel is
+evaluated once more. :func:`fill_outputs` maps the kernel's auxiliary values to the 15 outputs of
+DESIGN.md in :data:`chainmodel.models.base.ALL_OUTPUTS` order.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
+                    A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
+                    P_RHOA, P_RIGID, evaluate, jit)
+
+__all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
+           "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
+           "STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE"]
+
+# --- the inputs of one communication step ------------------------------------------------------
+C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
+C_SIZE = 10
+
+# --- step rule (built by FixedStepper.step_config) ----------------------------------------------
+#: explicit step (0: automatic), theta = h w of the tolerance, safety * stability limit, the
+#: stability limit itself (2 sqrt 2), an outer bound on the automatic step
+CF_STEP, CF_THETA, CF_STAB, CF_LIMIT, CF_MAX = range(5)
+CF_SIZE = 5
+
+# --- model constants of the loop (TorsionalModel.loop_constants) ------------------------------
+#: sprockets' highest natural frequency (bound), tooth ratio n_driver / n_driven, the level-1
+#: quasi-static sag coefficient rho g_n / 8, the span-mode amplitude limit of ModalModel.check
+#: (inf at level 1), a quarter of the driver's tooth angle (2 pi / n_driver) / 4
+Q_W_SPROCKET, Q_RATIO, Q_SAG, Q_AMP_LIMIT, Q_EVENT_ANGLE, Q_CENTRIFUGAL = range(6)
+Q_SIZE = 6
+
+STATUS_OK = 0
+STATUS_NONFINITE = 1     # a state became non-finite
+STATUS_UNSTABLE = 2      # the explicit step is above the stable limit of the current state
+STATUS_AMPLITUDE = 3     # a span mode's amplitude left the string model's range (level 2)
+STATUS_OUTPUTS = 4       # an output is not finite (its row is filled, for the message)
+
+W_ROWS = 14     # work vectors of the state's size (see _interval)
+V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi, ga, gb
+
+# Event crossing, the same constants as chainmodel.integrate (tests check they agree): the root
+# tolerance on a dense output and the gap eta between the steps on either side of an event, both
+# relative to the step h (docs/reduced_models.md, "Numerics").
+EVENT_TOL = 1e-5
+EVENT_GAP = 1e-4
+
+#: outputs, in ALL_OUTPUTS order (chainmodel.models.base)
+N_OUTPUTS = 15
+
+
+@jit
+def _inputs(t, c):
+    dt = c[C_DT]
+    s = (t - c[C_T0]) / dt
+    s2 = s * s
+    s3 = s2 * s
+    a0 = c[C_A0]
+    a1 = c[C_A1]
+    w0 = c[C_W0]
+    w1 = c[C_W1]
+    th = ((2 * s3 - 3 * s2 + 1) * a0 + (s3 - 2 * s2 + s) * dt * w0 + (3 * s2 - 2 * s3) * a1
+          + (s3 - s2) * dt * w1)
+    w = ((6 * s2 - 6 * s) / dt * a0 + (3 * s2 - 4 * s + 1) * w0 + (6 * s - 6 * s2) / dt * a1
+         + (3 * s2 - 2 * s) * w1)
+    if c[C_ACC0] == c[C_ACC1]:
+        acc = c[C_ACC0]     # held or constant: the source's own value
+    else:
+        acc = ((12 * s - 6) * a0 + (6 * s - 4) * dt * w0 + (6 - 12 * s) * a1
+               + (6 * s - 2) * dt * w1) / (dt * dt)
+    load = c[C_L0] + (c[C_L1] - c[C_L0]) * s
+    return th, w, acc, load
+
+
+@jit
+def _rhs_at(t, x, c, G, P, dx, aux):
+    th, w, acc, load = _inputs(t, c)
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
+
+
+@jit
+def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
+    """One RK4 step with k1 = f(t, x) already in ``k1`` (three new evaluations)."""
+    n = x.size
+    for i in range(n):
+        tmp[i] = x[i] + 0.5 * h * k1[i]
+    _rhs_at(t + 0.5 * h, tmp, c, G, P, k2, aux)
+    for i in range(n):
+        tmp[i] = x[i] + 0.5 * h * k2[i]
+    _rhs_at(t + 0.5 * h, tmp, c, G, P, k3, aux)
+    for i in range(n):
+        tmp[i] = x[i] + h * k3[i]
+    _rhs_at(t + h, tmp, c, G, P, k4, aux)
+    for i in range(n):
+        out[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+
+
+@jit
+def _switch(t, x, c, G, P, dx, aux, g):
+    _rhs_at(t, x, c, G, P, dx, aux)
+    for i in range(6):
+        g[i] = aux[A_G_UP + i]
+
+
+@jit
+def _changed(g, g0):
+    for i in range(g.size):
+        if g[i] * g0[i] < 0.0 and g[i] != 0.0 and g0[i] != 0.0:
+            return True
+    return False
+
+
+@jit
+def _dense(x0, f0, x1, f1, H, s, out):
+    """Dense output at s of a step from (x0, f0) at 0 to (x1, f1) at H: the cubic Hermite
+    interpolant (an extrapolation for s > H); for H = 0 the line x0 + s f0."""
+    if H == 0.0:
+        for i in range(x0.size):
+            out[i] = x0[i] + s * f0[i]
+        return
+    th = s / H
+    th2 = th * th
+    th3 = th2 * th
+    a = 2.0 * th3 - 3.0 * th2 + 1.0
+    b = (th3 - 2.0 * th2 + th) * H
+    d = (th3 - th2) * H
+    for i in range(x0.size):
+        out[i] = a * x0[i] + b * f0[i] + (1.0 - a) * x1[i] + d * f1[i]
+
+
+@jit
+def _secant(lo, hi, glo, ghi, g0):
+    """Earliest secant root in [lo, hi] among the functions changed between g0 and ghi."""
+    best = 1.0e300
+    for i in range(6):
+        if ghi[i] * g0[i] < 0.0 and ghi[i] != 0.0 and g0[i] != 0.0:
+            den = glo[i] - ghi[i]
+            if den != 0.0:
+                r = lo + (hi - lo) * glo[i] / den
+                if r < best:
+                    best = r
+    if best == 1.0e300 or not math.isfinite(best):
+        return 0.5 * (lo + hi)
+    return min(max(best, lo), hi)
+
+
+@jit
+def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, aux, V):
+    """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the dense
+    output :func:`_dense` (x0, f0; x1, f1; H), g_lo and g_hi the functions at the ends: safeguarded
+    regula falsi (Illinois) to ``tol``, one evaluation per iteration. Returns (s, evaluations), s
+    the secant root in the final bracket (chainmodel.integrate.FixedStepper._locate)."""
+    gh = V[2]
+    gm = V[3]
+    glo = V[4]
+    flo = V[5]
+    fhi = V[6]
+    for i in range(6):
+        gh[i] = g_hi[i]
+        glo[i] = g_lo[i]
+        flo[i] = g_lo[i]
+        fhi[i] = g_hi[i]
+    side = 0
+    evals = 0
+    for _it in range(100):
+        if hi - lo <= tol:
+            break
+        mid = 1.0e300
+        for i in range(6):
+            if gh[i] * g0[i] < 0.0 and gh[i] != 0.0 and g0[i] != 0.0:
+                den = flo[i] - fhi[i]
+                if den != 0.0:
+                    r = lo + (hi - lo) * flo[i] / den
+                    if r < mid:
+                        mid = r
+        margin = 1e-3 * (hi - lo)
+        if mid == 1.0e300 or not math.isfinite(mid):
+            mid = 0.5 * (lo + hi)
+        elif mid < lo + margin:
+            mid = lo + margin
+        elif mid > hi - margin:
+            mid = hi - margin
+        _dense(x0, f0, x1, f1, H, mid, xm)
+        _switch(t + mid, xm, c, G, P, dx, aux, gm)
+        evals += 1
+        if _changed(gm, g0):
+            hi = mid
+            for i in range(6):
+                gh[i] = gm[i]
+                fhi[i] = gm[i]
+                if side == -1:
+                    flo[i] = 0.5 * flo[i]
+            side = -1
+        else:
+            lo = mid
+            for i in range(6):
+                glo[i] = gm[i]
+                flo[i] = gm[i]
+                if side == 1:
+                    fhi[i] = 0.5 * fhi[i]
+            side = 1
+    return _secant(lo, hi, glo, gh, g0), evals
+
+
+@jit
+def _cross(t, x, h, t_end, c, G, P, W, V, aux):
+    """The step [t, t_end] (h = t_end - t) from ``x`` (f(t, x) in W[3]) over which a switching
+    function changed sign (plain step's end state and derivative in W[0], W[8], functions at both
+    ends in V[0], V[1]), redone across the first change (the algorithm of chainmodel.integrate.
+    FixedStepper._cross; docs/reduced_models.md, "Numerics"):
+
+    1. a first estimate s of the change on the step's cubic Hermite dense output;
+    2. one RK4 step to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
+       of every function (else s is searched again on the dense output of [t, t + sa]);
+    3. s located again on the dense output of the old side alone, (x, f) at t and at t + sa
+       extrapolated past sa - the plain step's end state straddled the kink, this does not;
+       if s ends up more than 4 eta past sa, back to 2;
+    4. across the change to sb = s + eta by the two one-sided slopes (the old side's f over
+       [sa, s], the new side's over [s, sb]), sb widened until its state is on the new side;
+    5. one RK4 step from sb to t + h, its first stage on the new side.
+
+    No RK4 stage straddles the kink (that costs an error of order jump * h / 6, first order in
+    h), and the crossing errs by order eta^2 f' + jump * (error of s). Leaves the state at t_end
+    in W[0], f there in W[8] (evaluated at t_end itself), the functions there in V[1]. Returns
+    (s, evaluations)."""
+    n = x.size
+    xn = W[0]
+    xm = W[1]
+    xb = W[2]
+    k1 = W[3]
+    k2 = W[4]
+    k3 = W[5]
+    k4 = W[6]
+    tmp = W[7]
+    f1 = W[8]
+    xa = W[9]
+    fa = W[10]
+    xq = W[11]
+    fq = W[12]
+    fb = W[13]
+    g0 = V[0]
+    g1 = V[1]
+    ga = V[7]
+    gb = V[8]
+    tol = EVENT_TOL * h
+    eta = EVENT_GAP * h
+    s, evals = _locate(t, x, k1, xn, f1, h, 0.0, h, g0, g1, g0, tol, c, G, P, xm, tmp, aux, V)
+    sa = 0.0
+    for _pass in range(8):
+        # 2. to sa, on the old side
+        for _it in range(20):
+            sa = s - eta
+            if sa <= 0.0:
+                sa = 0.0
+                break
+            _rk4_from(t, x, sa, c, G, P, k1, k2, k3, k4, tmp, aux, xa)
+            _switch(t + sa, xa, c, G, P, fa, aux, ga)
+            evals += 4
+            if not _changed(ga, g0):
+                break
+            s, e = _locate(t, x, k1, xa, fa, sa, 0.0, sa, g0, ga, g0, tol, c, G, P, xm, tmp,
+                           aux, V)
+            evals += e
+        if sa == 0.0:
+            for i in range(n):
+                xa[i] = x[i]
+                fa[i] = k1[i]
+            for i in range(6):
+                ga[i] = g0[i]
+        # 3. on the old side's dense output, extrapolated past sa
+        sb = min(s + eta, h)
+        for _it in range(60):
+            _dense(x, k1, xa, fa, sa, sb, xm)
+            _switch(t + sb, xm, c, G, P, tmp, aux, gb)
+            evals += 1
+            if _changed(gb, g0) or sb >= h:
+                break
+            sb = min(sa + 2.0 * (sb - sa), h)
+        if not _changed(gb, g0):
+            break                      # no change on the extrapolation: keep the estimate
+        if sb - sa <= 4.0 * eta:
+            s = _secant(sa, sb, ga, gb, g0)
+        else:
+            s, e = _locate(t, x, k1, xa, fa, sa, sa, sb, ga, gb, g0, tol, c, G, P, xm, tmp,
+                           aux, V)
+            evals += e
+        if s - sa <= 4.0 * eta:
+            break
+    # 4. across the change by the one-sided slopes
+    if s < sa:
+        s = sa
+    eta_b = eta
+    sb = h
+    for _it in range(60):
+        sb = min(s + eta_b, h)
+        for i in range(n):
+            xq[i] = xa[i] + (sb - sa) * fa[i]
+        _rhs_at(t + sb, xq, c, G, P, fq, aux)
+        for i in range(n):
+            xb[i] = xa[i] + (s - sa) * fa[i] + (sb - s) * fq[i]
+        _switch(t_end if sb >= h else t + sb, xb, c, G, P, fb, aux, gb)
+        evals += 2
+        if _changed(gb, g0) or sb >= h:
+            break
+        eta_b *= 8.0
+    # 5. the rest of the step
+    if sb < h:
+        _rk4_from(t + sb, xb, h - sb, c, G, P, fb, k2, k3, k4, tmp, aux, xn)
+        _switch(t_end, xn, c, G, P, f1, aux, g1)
+        evals += 4
+    else:
+        for i in range(n):
+            xn[i] = xb[i]
+            f1[i] = fb[i]
+        for i in range(6):
+            g1[i] = gb[i]
+    return s, evals
+
+
+@jit
+def omega_estimate(aux, G, P, Q):
+    """Highest natural frequency [rad/s] at the state of the evaluation ``aux``: the sprockets'
+    bound Q_W_SPROCKET (stiffest spans, TorsionalModel.sprocket_frequencies) and, at level 2,
+    the highest Galerkin mode of each span at its current tension,
+    n pi / lbar sqrt((T - rho S^2) / rho) (seed 004 eq 61, dimensional). The span modes are
+    what changes with the state: a tight span under load rings faster than at rest."""
+    w = Q[Q_W_SPROCKET]
+    n = int(P[P_MODES])
+    if n > 0:
+        rho = P[P_RHOA]
+        speed = G[9] * P[P_PITCH] * aux[A_W1] / (2.0 * math.pi)
+        for k in range(2):
+            tension = aux[A_T_UP] if k == 0 else aux[A_T_LOW]
+            lbar = P[P_LBAR_U] if k == 0 else P[P_LBAR_L]
+            s = tension / rho - speed * speed
+            if s > 0.0:
+                wm = n * math.pi / lbar * math.sqrt(s)
+                if wm > w:
+                    w = wm
+    return w
+
+
+@jit
+def _step_bound(w, h_event, cfg):
+    """h_max of the module docstring for the frequency w (automatic step)."""
+    h = math.inf
+    if w > 0.0:
+        h = min(cfg[CF_THETA] / w, cfg[CF_STAB] / w)
+    if cfg[CF_MAX] < h:
+        h = cfg[CF_MAX]
+    if h_event < h:
+        h = h_event
+    return h
+
+
+@jit
+def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, started):
+    """RK4 from (t0, x) to t1, in place on ``x``, with the step rule and guard of the module
+    docstring; a step over which a switching function changes sign is redone across the change
+    (:func:`_cross`). The first ``log_cap`` located event times go to
+    ``log[(log_at + k) % log.size]``. ``started``: W[3], V[0] and aux already hold the
+    evaluation at (t0, x) with the step's inputs there (the previous step's last one), else it
+    is made here. On return ``aux`` holds the evaluation at (t1, x), f in W[3], the switching
+    functions in V[0].
+
+    Returns (status, steps, events, rhs_evaluations, t, omega): status STATUS_OK, or
+    STATUS_NONFINITE (stopped after the step that left a non-finite state, at time t) or
+    STATUS_UNSTABLE (an explicit step above the stable limit of the state at t, nothing done
+    from there; omega the frequency estimate there)."""
+    n = x.size
+    xn = W[0]
+    k1 = W[3]
+    k2 = W[4]
+    k3 = W[5]
+    k4 = W[6]
+    tmp = W[7]
+    f1 = W[8]
+    g0 = V[0]
+    g1 = V[1]
+    evals = 0
+    events = 0
+    steps = 0
+    t = t0
+    if not started:
+        _switch(t, x, c, G, P, k1, aux, g0)
+        evals += 1
+    speed = max(abs(c[C_W0]), abs(c[C_W1]))
+    h_event = Q[Q_EVENT_ANGLE] / speed if speed > 0.0 else math.inf
+    fixed = cfg[CF_STEP] > 0.0
+    h = 0.0
+    while t < t1:
+        w = omega_estimate(aux, G, P, Q)
+        if fixed:
+            if cfg[CF_STEP] * w > cfg[CF_LIMIT]:
+                return STATUS_UNSTABLE, steps, events, evals, t, w
+            h_max = cfg[CF_STEP]
+        else:
+            h_max = _step_bound(w, h_event, cfg)
+        rest = t1 - t
+        if h == 0.0 or h > h_max or h > rest:
+            # first step, the guard, or round-off at the end: split the rest evenly
+            m = max(1.0, math.ceil(rest / h_max - 1e-9))
+            h = rest / m
+        if h >= rest * (1.0 - 1e-12):
+            t_next = t1
+            h = rest
+        else:
+            t_next = t + h
+        # k1 = f(t, x): the previous evaluation at this (t, x), the switch at the step end
+        _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
+        _switch(t_next, xn, c, G, P, f1, aux, g1)
+        evals += 4
+        if _changed(g1, g0):
+            s, e = _cross(t, x, h, t_next, c, G, P, W, V, aux)
+            evals += e
+            if events < log_cap:
+                log[(log_at + events) % log.size] = t + s
+            events += 1
+        steps += 1
+        t = t_next
+        for i in range(n):
+            x[i] = xn[i]
+            k1[i] = f1[i]
+        for i in range(6):
+            g0[i] = g1[i]
+        for i in range(n):
+            if not math.isfinite(x[i]):
+                return STATUS_NONFINITE, steps, events, evals, t, 0.0
+    return STATUS_OK, steps, events, evals, t, 0.0
+
+
+@jit
+def fill_outputs(x, aux, w_in, P, Q, out):
+    """The 15 outputs (ALL_OUTPUTS order) from the state x and the kernel's evaluation ``aux``
+    there; w_in the input-shaft speed (it breaks a tie between the spans' tensions). The tight
+    span is the one with the larger tension (ties: the upper span forward, the lower in
+    reverse). The reported span and link tensions include the centrifugal tension
+    rho A v^2 = Q[Q_CENTRIFUGAL] w1^2 (chainmodel.models.base.centrifugal_tension); the sag and
+    the seat force use the effective tension without it
+    (chainmodel.models.base.quasi_static_extras). Level 1's midspan deflection is the
+    quasi-static sag of the tight span under gravity, level 2's the span modes at the middle."""
+    if P[P_RIGID] > 0.5:
+        phi2 = x[0]
+        w2 = x[1]
+    else:
+        phi2 = x[1]
+        w2 = x[3]
+    phi1 = aux[A_PHI1]
+    w1 = aux[A_W1]
+    t_up = aux[A_T_UP]
+    t_low = aux[A_T_LOW]
+    upper = t_up > t_low or (t_up == t_low and w_in >= 0.0)
+    if upper:
+        tight = t_up
+        slack = t_low
+        length = aux[A_L_UP]
+    else:
+        tight = t_low
+        slack = t_up
+        length = aux[A_L_LOW]
+    centrifugal = Q[Q_CENTRIFUGAL] * w1 * w1
+    ratio = Q[Q_RATIO]
+    out[0] = phi1
+    out[1] = w1
+    out[2] = phi2
+    out[3] = w2
+    out[4] = aux[A_ACC2]
+    out[5] = aux[A_TAU_IN]
+    out[6] = tight + centrifugal
+    out[7] = slack + centrifugal
+    out[8] = length
+    # at rest the instantaneous ratio is undefined; report the mean (tooth) ratio
+    out[9] = w2 / w1 if abs(w1) > 1e-9 else ratio
+    out[10] = phi2 - ratio * phi1
+    if int(P[P_MODES]) > 0:
+        out[11] = aux[A_MID_UP] if upper else aux[A_MID_LOW]
+    elif tight > 0.0:
+        out[11] = -min(Q[Q_SAG] * length * length / tight, 0.5 * length)
+    else:
+        out[11] = -0.5 * length
+    out[12] = max(tight, slack) + centrifugal
+    out[13] = tight
+    out[14] = min(tight, slack) + centrifugal
+
+
+@jit
+def _finite(v):
+    for k in range(v.size):
+        if not math.isfinite(v[k]):
+            return False
+    return True
+
+
+@jit
+def outputs_into(x, th, w, acc, load, G, P, Q, dx, aux, out):
+    """Every output at (x, inputs) into ``out`` (one kernel evaluation); True when all are
+    finite."""
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
+    fill_outputs(x, aux, w, P, Q, out)
+    return _finite(out)
+
+
+@jit
+def outputs_many(X, th, w, acc, load, G, P, Q, OUT):
+    """:func:`outputs_into` for every row of X (inputs per row) into the rows of OUT."""
+    dx = np.empty(X.shape[1])
+    aux = np.empty(A_SIZE)
+    for i in range(X.shape[0]):
+        outputs_into(X[i], th[i], w[i], acc[i], load[i], G, P, Q, dx, aux, OUT[i])
+
+
+@jit
+def _check(x, P, Q):
+    """STATUS_AMPLITUDE when a span mode's amplitude exceeds Q_AMP_LIMIT (ModalModel.check)."""
+    n = int(P[P_MODES])
+    if n > 0:
+        base = 2 if P[P_RIGID] > 0.5 else 4
+        for i in range(base, base + 2 * n):
+            if abs(x[i]) > Q[Q_AMP_LIMIT]:
+                return STATUS_AMPLITUDE
+    return STATUS_OK
+
+
+@jit
+def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OUT, states, log,
+                   log_cap):
+    """Integrate from (times[0], x_in) through the communication points ``times`` (inputs given
+    there: angle, speed, acc, load; cubic Hermite inside each step, module docstring), leaving
+    ``x_in`` untouched and the state at the last point reached in ``x_out``. ``OUT[i]`` receives
+    the outputs at times[i] for i >= 1 (OUT may have no rows: not wanted), ``states[i]`` the
+    state (likewise; states[0] = x_in). At most ``log_cap`` event times per communication step go
+    to the ring buffer ``log``, in order from index 0.
+
+    Returns (reached, status, steps, events, rhs_evaluations, logged, t_status, omega):
+    ``reached`` the index of the last communication point completed (len(times) - 1 on success),
+    status as :func:`_interval` or STATUS_AMPLITUDE (checked at each point), t_status and omega
+    where it happened."""
+    n = x_in.size
+    x = x_out
+    for j in range(n):
+        x[j] = x_in[j]
+    W = np.empty((W_ROWS, n))
+    V = np.empty((V_ROWS, 6))
+    aux = np.empty(A_SIZE)
+    c = np.empty(C_SIZE)
+    want_out = OUT.shape[0] > 0
+    want_states = states.shape[0] > 0
+    if want_states:
+        for j in range(n):
+            states[0, j] = x[j]
+    total = 0
+    events = 0
+    evals = 0
+    logged = 0
+    started = False
+    for i in range(1, times.size):
+        t0 = times[i - 1]
+        t1 = times[i]
+        c[C_T0] = t0
+        c[C_DT] = t1 - t0
+        c[C_A0] = angle[i - 1]
+        c[C_W0] = speed[i - 1]
+        c[C_A1] = angle[i]
+        c[C_W1] = speed[i]
+        c[C_ACC0] = acc[i - 1]
+        c[C_ACC1] = acc[i]
+        c[C_L0] = load[i - 1]
+        c[C_L1] = load[i]
+        if started:
+            # the evaluation that ended the last step was made at this point's own inputs;
+            # it starts this step if the interpolant starts from the same ones (held or
+            # constant acceleration): an evaluation is a pure function of (x, inputs)
+            th, ww, aa, ld = _inputs(t0, c)
+            started = (th == angle[i - 1] and ww == speed[i - 1] and aa == acc[i - 1]
+                       and ld == load[i - 1])
+        status, m, e, v, t_st, w = _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, logged,
+                                            log_cap, started)
+        total += m
+        events += e
+        evals += v
+        logged += min(e, log_cap)
+        if status == STATUS_OK:
+            status = _check(x, P, Q)
+            t_st = t1
+        if status != STATUS_OK:
+            return i - 1, status, total, events, evals, logged, t_st, w
+        if want_states:
+            for j in range(n):
+                states[i, j] = x[j]
+        th, ww, aa, ld = _inputs(t1, c)
+        started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
+        if want_out:
+            if not started:
+                # the point's inputs differ from the interpolant's end values (a change of
+                # acceleration, round-off of the load): evaluate at the point's own inputs,
+                # which also starts the next step
+                _switch_at(x, angle[i], speed[i], acc[i], load[i], G, P, W[3], aux, V[0])
+                evals += 1
+                started = True
+            fill_outputs(x, aux, speed[i], P, Q, OUT[i])
+            if not _finite(OUT[i]):
+                return i - 1, STATUS_OUTPUTS, total, events, evals, logged, t1, 0.0
+    return times.size - 1, STATUS_OK, total, events, evals, logged, times[-1], 0.0
+
+
+@jit
+def _switch_at(x, th, w, acc, load, G, P, dx, aux, g):
+    """:func:`_switch` at given inputs."""
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
+    for i in range(6):
+        g[i] = aux[A_G_UP + i]
+
+
+@jit
+def advance_held(x_in, x_out, t0, t1, a0, w0, acc, load, G, P, Q, cfg, OUT, log):
+    """One communication step [t0, t1] with the inputs held first-order (the FMU's hold: the
+    angle advances at the held speed; speed, acceleration and load held): :func:`advance_points`
+    with times (t0, t1), angle (a0, a0 + w0 (t1 - t0)) and the rest repeated, so the same
+    arithmetic as the batched path; the outputs at t1 go to OUT[1] (OUT has two rows)."""
+    times = np.empty(2)
+    angle = np.empty(2)
+    speed = np.empty(2)
+    acc2 = np.empty(2)
+    load2 = np.empty(2)
+    times[0] = t0
+    times[1] = t1
+    angle[0] = a0
+    angle[1] = a0 + w0 * (t1 - t0)
+    speed[0] = w0
+    speed[1] = w0
+    acc2[0] = acc
+    acc2[1] = acc
+    load2[0] = load
+    load2[1] = load
+    states = np.empty((0, x_in.size))
+    return advance_points(x_in, x_out, times, angle, speed, acc2, load2, G, P, Q, cfg, OUT, states,
+                          log, log.size)
