@@ -6,6 +6,8 @@
     python build_fmu.py --reference         # also regenerate docs/fmu_reference.csv (regression
                                             # reference produced by the FMU just built)
     python build_fmu.py --doc               # also rewrite the variable table in docs/fmu.md
+    python build_fmu.py --warm 0,1,2,3      # compile these levels' kernels for this machine now
+                                            # (default 0,1,2; --warm none skips)
 
 Steps:
 1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` and the
@@ -21,7 +23,12 @@ Steps:
    variability / initial, output descriptions that say at which fidelity levels each output is
    a quasi-static estimate, ModelStructure Outputs and InitialUnknowns, DefaultExperiment and
    the capability flags (variable step, get/set and serialize state);
-4. check the result with ``fmpy.validation.validate_fmu``; any problem fails the build.
+4. check the result with ``fmpy.validation.validate_fmu``; any problem fails the build;
+5. warm the per-machine kernel cache (docs/numba_cache.md) for this build: a 1 ms run through
+   the FMU at each level of ``--warm`` compiles the kernels the FMU will load, so the first
+   simulation after a build does not pay the compile (the build does, once per machine and
+   build; a rebuild of the same sources finds them cached and takes well under a second per
+   level).
 """
 
 from __future__ import annotations
@@ -436,8 +443,12 @@ def main(argv=None) -> int:
                     help="regenerate docs/fmu_reference.csv with the FMU just built")
     ap.add_argument("--doc", action="store_true",
                     help="rewrite the generated variable table in docs/fmu.md")
+    ap.add_argument("--warm", default="0,1,2", metavar="LEVELS",
+                    help="fidelity levels whose compiled kernels to cache for this machine after "
+                         "the build, comma-separated (default 0,1,2; 'none' skips)")
     ap.add_argument("-q", "--quiet", action="store_true")
     args = ap.parse_args(argv)
+    levels = parse_levels(ap, args.warm)
     fmu = build(args.out, quiet=args.quiet)
     if args.doc:
         from chainmodel.fmu import update_doc_table
@@ -447,7 +458,39 @@ def main(argv=None) -> int:
         write_reference(fmu)
     if args.doc or args.reference:   # ship the new documentation / reference in the FMU too
         build(args.out, quiet=True)
+    warm(fmu, levels, quiet=args.quiet)
     return 0
+
+
+def parse_levels(ap, text: str) -> tuple[int, ...]:
+    """--warm's comma-separated fidelity levels ('none': no level)."""
+    if text.strip().lower() in ("none", ""):
+        return ()
+    try:
+        levels = tuple(sorted({int(v) for v in text.split(",")}))
+    except ValueError:
+        levels = (-1,)
+    if any(v not in (0, 1, 2, 3) for v in levels):
+        ap.error(f"--warm must list fidelity levels from 0, 1, 2, 3 (comma-separated) or "
+                 f"'none', got {text!r}")
+    return levels
+
+
+def warm(fmu: Path, levels, quiet: bool = False) -> None:
+    """Run 1 ms of the default scene through the FMU at each of ``levels`` (fmpy), so that the
+    kernels this build loads are compiled into the per-machine cache now."""
+    import time
+    from chainmodel.fmu import FMUSession
+    from chainmodel.scene import load_scene
+    if not levels:
+        return
+    wall = time.perf_counter()
+    with FMUSession(fmu) as session:
+        for level in levels:
+            session.run(load_scene("xu2010", fidelity=level, duration=1e-3))
+    if not quiet:
+        print(f"compiled kernels of levels {', '.join(map(str, levels))} cached for this machine "
+              f"({time.perf_counter() - wall:.1f} s)")
 
 
 if __name__ == "__main__":

@@ -66,7 +66,10 @@ def run_case(kw, duration):
     d = r.scene.drive
     finite = all(np.all(np.isfinite(r[n])) for n in r.names)
     if abs(r.scene.operating.speed) > 0:
-        ratio = tooth_ratio(r["driver.angle"][m], r["driven.angle"][m], d.n_driver)
+        # against the input-shaft angle (prescribed, monotonic), not the driver sprocket's
+        # (a state, which in a rattling drive does not turn monotonically)
+        phi_in = r.scene.input_arrays(r.time[m])[0]
+        ratio = tooth_ratio(phi_in, r["driven.angle"][m], d.n_driver)
         err = f"{ratio / (d.n_driver / d.n_driven) - 1:+.1e}"
     else:
         err = "(at rest)"

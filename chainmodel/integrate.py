@@ -576,8 +576,9 @@ class FixedStepper(Stepper):
                 g1 = switch(t_next, x_new, source(t_next))
             t, x, g0 = t_next, x_new, g1
             self.stats["steps"] += 1
-            if not np.all(np.isfinite(x)):
-                model.check(t, x)
+            # every step, as the compiled loops do (their _check): a diverging state is caught
+            # at its first unphysical step, where its cause can still be told apart
+            model.check(t, x)
         self.x = x
 
     def _cross(self, t, x, h, x1, g0, g1, source):

@@ -235,7 +235,8 @@ class MultibodyModel(Model):
     def check(self, t: float, x: np.ndarray) -> None:
         """SimulationDiverged when a link leaves [0.5, 1.5] pitches or the state is not finite,
         with the cause: a chain too soft for its tension (most links stretched by a tenth of a
-        pitch or more: the stiffness, not the step, is at fault) or a diverging integration."""
+        pitch or more, none faster than an elastic wave crosses a link: the stiffness, not the step,
+        is at fault) or a diverging integration."""
         if not np.all(np.isfinite(x)):
             raise SimulationDiverged(
                 f"multibody model diverged at t = {t:.6g} s (non-finite state); try a smaller "
@@ -252,6 +253,19 @@ class MultibodyModel(Model):
         p = self.drive.pitch
         stretch = L * p - self.P[K.I_L0]
         taut = stretch > 0
+        # a link stretching faster than an elastic wave crosses it, p sqrt(k / m), is the
+        # integration running away (h omega past the stability limit), not a soft chain's
+        # quasi-static stretch, however many links it has reached by now
+        v = x[n + 2:2 * n].reshape(self.M, 2)
+        dv = np.diff(v, axis=0, append=v[:1])
+        rate = float(np.max(np.abs(np.einsum("ij,ij->i", dz, dv)) / (L * p)))
+        wave = p * math.sqrt(k / self.params["chain.link_mass"])
+        if rate > wave:
+            raise SimulationDiverged(
+                f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
+                f"pitches and stretches at {rate:.3g} m/s, faster than an elastic wave crosses "
+                f"a link ({wave:.3g} m/s): the integration is unstable; try a smaller "
+                "solver.step (0 for automatic)")
         if np.count_nonzero(stretch > 0.1 * p) >= max(3, self.M // 4):
             tension = float(np.percentile(k * stretch[taut], 90))
             raise SimulationDiverged(
