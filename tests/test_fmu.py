@@ -555,3 +555,16 @@ def test_fmu_uses_its_vendored_chainmodel_and_needs_only_numpy_scipy(chaindrive_
     assert res["out"]["driver.angle"] == pytest.approx(0.3 + 10.0 * 1e-3, rel=1e-14)
     assert res["out"]["driver.speed"] == 10.0
     assert res["out"]["driven.speed"] > 0
+
+
+@pytest.mark.parametrize("value", ["4", "1,x", "-1"])
+def test_build_refuses_a_bad_warm_list(value, tmp_path):
+    """build_fmu.py --warm takes fidelity levels 0-3 or 'none'; anything else is a usage error
+    (exit 2) naming the option, before anything is built."""
+    root = Path(__file__).resolve().parent.parent
+    proc = subprocess.run([sys.executable, str(root / "build_fmu.py"), "--out",
+                           str(tmp_path / "X.fmu"), "--warm", value],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert "--warm" in proc.stderr and value in proc.stderr
+    assert not (tmp_path / "X.fmu").exists()
