@@ -114,8 +114,8 @@ def _p(*args, **kw) -> Parameter:
 
 # ISO 606 10B roller (the xu2010 chain, p = 15.875 mm): d1 = 10.16 mm.
 _ROLLER_RADIUS = 10.16e-3 / 2
-_SEAT_RADIUS = 0.505 * 10.16e-3  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
-_JOINT_CLEARANCE = 5.13e-3 - 5.08e-3  # ISO 606 10B: bush bore d3 min - pin body d2 max
+_SEAT_RADIUS = round(0.505 * 10.16e-3, 12)  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
+_JOINT_CLEARANCE = round(5.13e-3 - 5.08e-3, 12)  # ISO 606 10B: bush bore d3 min - pin body d2 max
 
 PARAMETERS: tuple[Parameter, ...] = (
     _p("fidelity", 1, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody "
