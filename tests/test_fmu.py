@@ -208,7 +208,8 @@ def test_variables_follow_the_schema_and_the_contract(model_description):
     assert structure.find("Derivatives") is None
     # parameters: exactly the schema, typed by kind, defaults as start values
     params = {sv.get("name"): sv for sv in variables if sv.get("causality") == "parameter"}
-    assert set(params) == set(P.BY_NAME)
+    from chainmodel.fidelity_auto import FMU_PARAMETERS   # fidelity "auto" (issue 11)
+    assert set(params) == set(P.BY_NAME) | set(FMU_PARAMETERS)
     types = {float: "Real", int: "Integer", bool: "Boolean", str: "String"}
     for p in P.PARAMETERS:
         sv = params[p.name]
