@@ -556,3 +556,27 @@ def test_fmu_uses_its_vendored_chainmodel_and_needs_only_numpy_scipy(chaindrive_
     assert res["out"]["driver.angle"] == pytest.approx(0.3 + 10.0 * 1e-3, rel=1e-14)
     assert res["out"]["driver.speed"] == 10.0
     assert res["out"]["driven.speed"] > 0
+
+
+def test_fidelity_auto_parameters_choose_the_level_and_log_why(chaindrive_fmu_dir):
+    """auto.enabled with auto.outputs / auto.accuracy (issue 11): the FMU builds the level that
+    chainmodel.fidelity_auto.choose_parameters picks for the same parameters and operating
+    point, and logs the choice with its expected error and source; a bad accuracy fails
+    initialization naming it."""
+    from chainmodel import fidelity_auto
+    speed, load = 120 * math.pi / 30, 43.2
+    expected, choice = fidelity_auto.choose_parameters(P.validate({}), speed, load,
+                                                       "tight_span.tension", 0.2)
+    s = Slave(chaindrive_fmu_dir, {"auto.enabled": True, "auto.outputs": "tight_span.tension",
+                                   "auto.accuracy": 0.2, "auto.input_speed": speed,
+                                   "auto.load_torque": load})
+    try:
+        s.fmu.exitInitializationMode()
+        log = s.messages()
+    finally:
+        s.free()
+    level = expected["fidelity"]
+    assert f"fidelity {level} ({P.FIDELITY_NAMES[level]})" in log
+    assert "fidelity auto: " + choice.config in log and "tradeoff.csv" in log
+    log = _initialization_error(chaindrive_fmu_dir, {"auto.enabled": True, "auto.accuracy": 3.0})
+    assert "accuracy" in log and "3" in log

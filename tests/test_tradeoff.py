@@ -157,3 +157,13 @@ def test_nearest_scene_is_the_measured_scene_itself_and_far_scenes_are_extrapola
         assert choice.source_scene == spec.name and choice.distance < 1e-4  # CSV: 6 digits
     far = auto.choose(load_scene("xu2010", input_speed_rpm=5), ["tight_span.tension"], 0.05)
     assert far.extrapolated and "extrapolated" in far.message
+
+
+def test_bench_tradeoff_cli_refuses_unknown_scenes_and_repeats(capsys, tmp_path):
+    assert main(["bench", "tradeoff", "--scenes", "xu2010 7 rpm", "--csv",
+                 str(tmp_path / "t.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "--scenes" in err and "xu2010 7 rpm" in err and "xu2010 120 rpm" in err
+    assert main(["bench", "tradeoff", "--repeats", "0", "--csv", str(tmp_path / "t.csv")]) == 2
+    assert "--repeats" in capsys.readouterr().err
+    assert not (tmp_path / "t.csv").exists()
