@@ -412,10 +412,14 @@ def add_arguments(p) -> None:
                    help="comma-separated study scenes (default all: "
                         + ", ".join(s.name for s in SCENES) + ")")
     g.add_argument("--repeats", type=int, default=3, help="warm timed runs per configuration")
-    g.add_argument("--csv", default="chainmodel/data/tradeoff.csv", help="CSV written")
-    g.add_argument("--markdown", default="docs/tradeoff_results.md", help="tables written")
-    g.add_argument("--figures", default="docs/figures", help="directory of the two plots "
-                   "('' for none)")
+    # defaults: this package's data file (what fidelity="auto" reads) and the checkout's docs
+    root = Path(__file__).resolve().parents[2]
+    g.add_argument("--csv", default=str(root / "chainmodel" / "data" / "tradeoff.csv"),
+                   help="CSV written (default: the package's own, read by fidelity='auto')")
+    g.add_argument("--markdown", default=str(root / "docs" / "tradeoff_results.md"),
+                   help="tables written")
+    g.add_argument("--figures", default=str(root / "docs" / "figures"),
+                   help="directory of the two plots ('' for none)")
     g.add_argument("--cache-dir", default=str(Path.home() / ".cache" / "chainmodel" / "tradeoff"),
                    help="where level-3 references are cached ('' for no cache)")
     g.add_argument("--cold", action="store_true",
@@ -474,7 +478,7 @@ def run_cli(args) -> int:
 def fmu_section() -> str:
     """The FMU's cost per communication step on xu2010 at 1e-4 and 1e-3 s, measured by
     benchmarks/fmu_cost.py (which must be importable: run from the repository root)."""
-    sys.path.insert(0, str(Path.cwd() / "benchmarks"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     import fmu_cost  # noqa: PLC0415 - a benchmark script, not part of the package
     lines = ["\n### FMU path (xu2010, 120 rpm; benchmarks/fmu_cost.py)\n",
              "| level | step 1e-4 s: us per step | step 1e-3 s: us per step |", "|---|---|---|"]
