@@ -110,6 +110,8 @@ def library_metadata() -> dict:
 
     units = {o.name: o.unit or "1" for o in ALL_OUTPUTS}
     units.update({"input_shaft.angle": "rad", "input_shaft.speed": "rad/s", "load.torque": "N.m"})
+    from chainmodel.fidelity_auto import FMU_UNITS    # the adapter's auto.* parameters
+    units.update(FMU_UNITS)
     display = dict(SPEED_DISPLAY)
     for p in P.PARAMETERS:
         if p.kind is float:

@@ -251,7 +251,14 @@ def register_run(subparsers) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE|PRESET",
                    help="preset name (chainmodel presets) or a scene .toml file")
     p.add_argument("--fidelity", metavar="LEVEL",
-                   help="0-3 or kinematic, torsional, modal, multibody (default: the scene's)")
+                   help="0-3 or kinematic, torsional, modal, multibody (default: the scene's); "
+                        "'auto': the cheapest level meeting --accuracy on --outputs by the "
+                        "measured trade table (docs/tradeoff.md)")
+    p.add_argument("--outputs", metavar="NAMES", default=None,
+                   help="with --fidelity auto: comma-separated outputs the choice must get "
+                        "right (e.g. driven.speed,tight_span.tension; default: all measured)")
+    p.add_argument("--accuracy", type=float, metavar="REL", default=None,
+                   help="with --fidelity auto: relative error target (default 0.05)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s]")
     p.add_argument("--output-interval", type=float, metavar="S",
                    help="communication step / sampling interval [s]")
@@ -346,9 +353,20 @@ def cmd_run(args) -> int:
                        ("input_speed_rpm", args.speed_rpm), ("load_torque", args.load_torque)):
         if value is not None:
             kw[key] = value
+    auto = isinstance(kw.get("fidelity"), str) and kw["fidelity"].strip().lower() == "auto"
+    if auto:
+        kw.pop("fidelity")
+    elif args.outputs is not None or args.accuracy is not None:
+        raise CLIError("--outputs and --accuracy are only used with --fidelity auto")
     scene = load_scene(scene_arg)
     if kw:
         scene = scene.with_overrides(**kw)
+    choice = None
+    if auto:
+        from .fidelity_auto import choose
+        choice = choose(scene, args.outputs, args.accuracy)
+        scene = scene.with_overrides(**choice.overrides)
+        sys.stderr.write(f"chainmodel: {choice.message}\n")
     progress = not (args.quiet or args.json)
     if fmu_arg is not None:
         path = _fmu_path(fmu_arg)
@@ -381,6 +399,11 @@ def cmd_run(args) -> int:
                 "fidelity_level": int(result.fidelity), "via_fmu": fmu_arg is not None,
                 "samples": len(result.time), "output_interval_s": scene.output_interval,
                 "drive": drive_dict(scene.drive), "notes": list(scene.notes)})
+    if choice is not None:
+        out["fidelity_auto"] = {"config": choice.config, "expected_error": choice.expected_error,
+                                "figures": list(choice.figures), "met": choice.met,
+                                "source_scene": choice.source_scene,
+                                "extrapolated": choice.extrapolated, "message": choice.message}
     written = []
     if args.csv:
         written.append(("time series", result.to_csv(args.csv)))

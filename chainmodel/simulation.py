@@ -35,6 +35,8 @@ class Result:
         # a number, or a callable computed on first use (level 3 settles the chain for it)
         self._static_tension = static_tension
         self.snapshots = snapshots or []
+        #: fidelity="auto": the chainmodel.fidelity_auto.AutoChoice that picked the level
+        self.auto_choice = None
 
     @property
     def static_tension(self) -> float:
@@ -72,7 +74,8 @@ class Result:
     def warnings(self) -> list[str]:
         """What the summary warns about (a short steady window, an output interval that cannot
         resolve the meshing frequency); the CLI prints them."""
-        return list(self.summary()["warnings"])
+        notes = [self.auto_choice.message] if self.auto_choice is not None else []
+        return list(self.summary()["warnings"]) + notes
 
     def to_csv(self, path: str | Path) -> Path:
         path = Path(path)
@@ -194,15 +197,36 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
 
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,
-             progress: bool = False, snapshot_every: int = 0, **overrides) -> Result:
+             progress: bool = False, snapshot_every: int = 0, outputs=None, accuracy=None,
+             **overrides) -> Result:
     """Simulate a scene (preset name, TOML path or Scene) and return every output over time.
 
     Keyword overrides: ``fidelity`` (0-3 or kinematic/torsional/modal/multibody), ``duration``,
     ``output_interval``, ``input_speed_rpm``, ``ramp_time``, ``load_torque``,
     ``static_tension``, and any parameter, dots written as underscores
     (``chain_link_damping=50``) or given in ``parameters={"chain.link_damping": 50}``.
+
+    ``fidelity="auto"`` picks the cheapest level and stepper settings that the measured trade
+    table (chainmodel/data/tradeoff.csv, docs/tradeoff.md) says meet ``accuracy`` (relative,
+    default 0.05) on ``outputs`` (output names such as "driven.speed", default: every measured
+    figure); ``result.auto_choice`` and ``result.warnings`` say what it chose, the expected
+    error and its source (chainmodel.fidelity_auto).
     """
+    auto = isinstance(overrides.get("fidelity"), str) and \
+        overrides["fidelity"].strip().lower() == "auto"
+    if auto:
+        overrides.pop("fidelity")
+    elif outputs is not None or accuracy is not None:
+        raise ValueError("outputs and accuracy are only used with fidelity='auto', got "
+                         f"fidelity={overrides.get('fidelity', 'the scene default')!r}")
     sc = load_scene(scene)
     if parameters or overrides:
         sc = sc.with_overrides(parameters=parameters, **overrides)
-    return run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    choice = None
+    if auto:
+        from .fidelity_auto import choose
+        choice = choose(sc, outputs, accuracy)
+        sc = sc.with_overrides(**choice.overrides)
+    result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    result.auto_choice = choice
+    return result

@@ -194,7 +194,7 @@ def _vendored_chainmodel(resources: str):
     elif not Path(sys.modules[alias].__path__[0]).is_dir():
         _repoint(alias, root)
     mod = {name: importlib.import_module(f"{alias}.{name}")
-           for name in ("parameters", "models", "integrate", "scene")}
+           for name in ("parameters", "models", "integrate", "scene", "fidelity_auto")}
     mod["package"] = sys.modules[alias]
     return mod
 
@@ -314,6 +314,7 @@ class ChainDrive(Fmi2Slave):
             _tidy_sys_path(self.resources)
         self._P, self._M, self._I, self._S = (lib["parameters"], lib["models"],
                                               lib["integrate"], lib["scene"])
+        self._lib_auto = lib["fidelity_auto"]
         self.version = getattr(lib["package"], "__version__", None)
         self.default_experiment = DEFAULT_EXPERIMENT
 
@@ -348,6 +349,24 @@ class ChainDrive(Fmi2Slave):
                            initial=Fmi2Initial.exact, description=parameter_description(p))
             self._params.append((vr, p, table))
             self._param_by_vr[vr] = p
+        # fidelity "auto" (chainmodel.fidelity_auto chooses; nothing of it is decided here)
+        auto = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
+                    initial=Fmi2Initial.exact)
+        self._auto_vrs = (
+            self._add(Boolean, "auto.enabled", False, self._bool, description=(
+                "fidelity auto: fidelity and solver.* chosen from the measured trade table "
+                "(docs/tradeoff.md) to meet auto.accuracy on auto.outputs"), **auto),
+            self._add(String, "auto.outputs", "", self._str, description=(
+                "comma-separated outputs auto must get right ('' = every measured figure)"),
+                **auto),
+            self._add(Real, "auto.accuracy", 0.05, self._real,
+                      description="relative error target of auto [1]", **auto),
+            self._add(Real, "auto.input_speed", 0.0, self._real, description=(
+                "steady input speed auto chooses for [rad/s] (0: the input at initialization)"),
+                **auto),
+            self._add(Real, "auto.load_torque", 0.0, self._real, description=(
+                "load torque auto chooses for [N.m] (0: the input at initialization)"), **auto))
+        self._auto_set = frozenset(self._auto_vrs)
         self._output_names = [name for _, name in self._output_map]
         self._output_vrs = frozenset(vr for vr, _ in self._output_map)
         self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
@@ -396,6 +415,14 @@ class ChainDrive(Fmi2Slave):
                 # fmi2Fatal from a setter, so: fmi2OK, the value ignored, an error logged
                 self.log(_fmi_text(f"parameter {p.name} is fixed after initialization; the new "
                                    f"value {value!r} is ignored"), Fmi2Status.error)
+                return
+            table[vr] = value
+            self._params_changed = True
+        elif vr in self._auto_set:
+            if self._initialized:
+                self.log(_fmi_text(f"parameter {self.vars[vr].name} is fixed after "
+                                   f"initialization; the new value {value!r} is ignored"),
+                         Fmi2Status.error)
                 return
             table[vr] = value
             self._params_changed = True
@@ -482,6 +509,15 @@ class ChainDrive(Fmi2Slave):
         """Validate the parameters and build model and stepper at time t (raises ValueError)."""
         P = self._P
         params = P.validate(self._parameter_values())
+        on, outputs, accuracy, speed, load = (self._table_of[vr][vr] for vr in self._auto_vrs)
+        if on:
+            u0 = self._inputs_at(t)
+            params, choice = self._lib_auto.choose_parameters(
+                params, speed if speed else u0.speed, load if load else u0.torque,
+                outputs or None, accuracy)
+            if choice.message != getattr(self, "_auto_message", None):
+                self._auto_message = choice.message
+                self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
         level = params["fidelity"]
         classes = self._M.MODEL_CLASSES
         if level not in classes:

@@ -208,7 +208,8 @@ def test_variables_follow_the_schema_and_the_contract(model_description):
     assert structure.find("Derivatives") is None
     # parameters: exactly the schema, typed by kind, defaults as start values
     params = {sv.get("name"): sv for sv in variables if sv.get("causality") == "parameter"}
-    assert set(params) == set(P.BY_NAME)
+    from chainmodel.fidelity_auto import FMU_PARAMETERS   # fidelity "auto" (issue 11)
+    assert set(params) == set(P.BY_NAME) | set(FMU_PARAMETERS)
     types = {float: "Real", int: "Integer", bool: "Boolean", str: "String"}
     for p in P.PARAMETERS:
         sv = params[p.name]
@@ -568,3 +569,27 @@ def test_build_refuses_a_bad_warm_list(value, tmp_path):
     assert proc.returncode == 2
     assert "--warm" in proc.stderr and value in proc.stderr
     assert not (tmp_path / "X.fmu").exists()
+
+
+def test_fidelity_auto_parameters_choose_the_level_and_log_why(chaindrive_fmu_dir):
+    """auto.enabled with auto.outputs / auto.accuracy (issue 11): the FMU builds the level that
+    chainmodel.fidelity_auto.choose_parameters picks for the same parameters and operating
+    point, and logs the choice with its expected error and source; a bad accuracy fails
+    initialization naming it."""
+    from chainmodel import fidelity_auto
+    speed, load = 120 * math.pi / 30, 43.2
+    expected, choice = fidelity_auto.choose_parameters(P.validate({}), speed, load,
+                                                       "tight_span.tension", 0.2)
+    s = Slave(chaindrive_fmu_dir, {"auto.enabled": True, "auto.outputs": "tight_span.tension",
+                                   "auto.accuracy": 0.2, "auto.input_speed": speed,
+                                   "auto.load_torque": load})
+    try:
+        s.fmu.exitInitializationMode()
+        log = s.messages()
+    finally:
+        s.free()
+    level = expected["fidelity"]
+    assert f"fidelity {level} ({P.FIDELITY_NAMES[level]})" in log
+    assert "fidelity auto: " + choice.config in log and "tradeoff.csv" in log
+    log = _initialization_error(chaindrive_fmu_dir, {"auto.enabled": True, "auto.accuracy": 3.0})
+    assert "accuracy" in log and "3" in log

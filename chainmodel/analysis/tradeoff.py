@@ -116,7 +116,9 @@ def register(subparsers) -> None:
         description="Run one scene at every fidelity level with its default stepper and print "
                     "wall seconds per simulated second and the steady-state figures of each "
                     "level with their deviation from the reference level (default 3, multibody).")
-    p.add_argument("scene", nargs="?", default="xu2010", help="preset name or scene .toml")
+    p.add_argument("scene", nargs="?", default="xu2010",
+                   help="preset name or scene .toml; 'tradeoff' runs the study of many scenes "
+                        "and steppers (chainmodel.analysis.trade_study, docs/tradeoff.md)")
     p.add_argument("--levels", default="0,1,2,3", help="comma-separated levels (default 0,1,2,3)")
     p.add_argument("--reference", type=int, default=3, help="reference level (default 3)")
     p.add_argument("--duration", type=float, default=None, metavar="S",
@@ -125,11 +127,16 @@ def register(subparsers) -> None:
                    help="communication step (default: the scene's; Python overhead per output "
                         "point is a large part of levels 1-3's cost at 1e-4 s)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    from .trade_study import add_arguments
+    add_arguments(p)
     p.set_defaults(handler=_run_bench)
 
 
 def _run_bench(args) -> int:
     from ..cli import print_json
+    if args.scene == "tradeoff":    # `chainmodel bench tradeoff`: the study of many scenes
+        from .trade_study import run_cli
+        return run_cli(args)
     try:
         levels = tuple(int(x) for x in args.levels.split(","))
     except ValueError:

@@ -1,0 +1,489 @@
+"""The measured speed-accuracy trade over many scenes (issue 11): ``chainmodel bench tradeoff``.
+
+For each scene of :data:`SCENES` every configuration of :data:`CONFIGS` (fidelity level x
+stepper x tolerance or step) runs over the same short run and is compared with a converged
+level-3 reference (Verlet at a quarter of level 3's own step, docs/multibody.md "Convergence":
+its figures move by < 0.03 % from h to h/8). For every run the study records
+
+* the wall time per simulated second, median of ``repeats`` warm runs (the kernels compiled
+  and the model built once before), and the peak Python/numpy memory of one run (tracemalloc);
+* the relative error against the reference of the figures of :data:`METRICS`, all over the
+  steady window of :func:`chainmodel.analysis.summary.steady_window`.
+
+A level a scene refuses (level 0 above half its lowest quasi-static mode, level 2 with a slack
+span) is recorded with status ``not valid here``, a run that fails with ``failed: ...``.
+The rows are tidy (one per scene x configuration) and go to a CSV that
+:mod:`chainmodel.fidelity_auto` reads at run time (chainmodel/data/tradeoff.csv).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import math
+import statistics
+import subprocess
+import sys
+import time
+import tracemalloc
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..fidelity_auto import parse_rows as _parse_rows, scene_features
+from ..parameters import FIDELITY_NAMES
+from ..scene import Scene, load_scene
+from ..simulation import run_scene
+from .summary import steady_window
+
+__all__ = ["SceneSpec", "Config", "SCENES", "CONFIGS", "METRICS", "scene_features", "metrics",
+           "relative_errors", "run_study", "write_csv", "read_csv", "markdown", "plot",
+           "cold_costs"]
+
+#: figure key -> (label, summary key of Result.summary() where there is one)
+METRICS = {
+    "mean_tight_tension": ("mean tight-span tension", "mean_tight_tension_n"),
+    "peak_tight_tension": ("peak tight-span tension", "peak_tight_tension_n"),
+    "mean_slack_tension": ("mean slack-span tension", "mean_slack_tension_n"),
+    "peak_slack_tension": ("peak slack-span tension", "peak_slack_tension_n"),
+    "driven_speed_ripple": ("driven-speed ripple RMS", "driven_speed_ripple_rms_rad_s"),
+    "input_torque_ripple": ("input-shaft torque ripple RMS", None),
+    "mesh_amplitude": ("driven-speed amplitude at the meshing frequency", None),
+    "transmission_error": ("transmission error RMS", None),
+}
+#: the tension figures' errors are relative to max(|reference|, this x the reference's mean tight
+#: tension), so a slack span near zero tension does not turn a few newtons into 1000 %
+TENSION_FLOOR = 0.02
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """A named scene of the study: a preset and scene overrides (load_scene keywords)."""
+    name: str
+    preset: str
+    overrides: dict = field(default_factory=dict)
+
+    def scene(self, **more) -> Scene:
+        return load_scene(self.preset, **{**self.overrides, **more})
+
+
+def _tight(n1, n2, links, pitch=0.015875):
+    """Overrides for an n1/n2 drive at xu2010's pitch whose chain of ``links`` wraps tightly
+    (centre distance from the links, seed 004 section 2), as tests/test_extremes.py builds them."""
+    return dict(drive_driver_teeth=n1, drive_driven_teeth=n2, drive_links=links,
+                drive_centre_distance=0.0)
+
+
+#: the study's scenes; durations keep >= 4 tooth periods in the steady half of the run
+SCENES = (
+    SceneSpec("xu2010 30 rpm", "xu2010", dict(input_speed_rpm=30, duration=0.8)),
+    SceneSpec("xu2010 120 rpm", "xu2010", dict(input_speed_rpm=120, duration=0.4)),
+    SceneSpec("xu2010 600 rpm", "xu2010", dict(input_speed_rpm=600, duration=0.2)),
+    SceneSpec("xu2010 2000 rpm", "xu2010", dict(input_speed_rpm=2000, duration=0.15,
+                                                 output_interval=5e-5)),
+    SceneSpec("C1 100 rpm", "C1", dict(input_speed_rpm=100, duration=1.2)),
+    SceneSpec("C1 400 rpm", "C1", dict(input_speed_rpm=400, duration=1.2)),
+    SceneSpec("coarse 6/9 300 rpm", "xu2010", dict(_tight(6, 9, 16), static_tension=400,
+                                                   load_torque=5.0, input_speed_rpm=300,
+                                                   duration=0.3)),
+    SceneSpec("long centre N=60 120 rpm", "xu2010", dict(_tight(25, 17, 144), static_tension=500,
+                                                        load_torque=20.0, input_speed_rpm=120,
+                                                        duration=0.4)),
+)
+
+
+@dataclass(frozen=True)
+class Config:
+    """One way to run a scene: a level, a stepper and its tolerance or step (as a fraction of
+    level 3's own Verlet step)."""
+    level: int
+    method: str                    # rk4, rk45, verlet, or "-" for the stateless level 0
+    tolerance: float | None = None  # solver.tolerance of the fixed-step rule
+    step_fraction: float | None = None
+
+    @property
+    def label(self) -> str:
+        if self.level == 0:
+            return "0 kinematic"
+        s = f"{self.level} {self.method}"
+        if self.tolerance is not None:
+            s += f" tol {self.tolerance:g}"
+        if self.step_fraction is not None:
+            s += f" h x {self.step_fraction:g}"
+        return s
+
+    def overrides(self, scene: Scene) -> dict:
+        if self.level == 0:
+            return dict(fidelity=0)
+        out = dict(fidelity=self.level, solver_method=self.method)
+        if self.tolerance is not None:
+            out["solver_tolerance"] = self.tolerance
+        if self.step_fraction is not None:
+            out["solver_step"] = level3_step(scene) * self.step_fraction
+        return out
+
+
+def level3_step(scene: Scene) -> float:
+    """The Verlet step level 3 chooses itself for ``scene`` (solver.step = 0)."""
+    sc = scene.with_overrides(fidelity=3, solver_method="verlet", solver_step=0.0)
+    return float(sc.stepper().h)
+
+
+CONFIGS = (
+    Config(0, "-"),
+    *(Config(lv, "rk4", tol) for lv in (1, 2) for tol in (5e-3, 5e-4, 5e-5)),
+    *(Config(lv, "rk45") for lv in (1, 2)),
+    Config(3, "verlet", step_fraction=1.0),
+    Config(3, "verlet", step_fraction=0.5),
+)
+REFERENCE = Config(3, "verlet", step_fraction=0.25)
+
+
+# --- figures -------------------------------------------------------------------------------
+
+def metrics(result) -> dict[str, float]:
+    """The figures of :data:`METRICS` of one run over its steady window."""
+    s = result.summary()
+    t = result.time
+    mask = steady_window(t, result.scene.operating.ramp_time, float(t[-1]))
+    out = {k: float(s[key]) for k, (_, key) in METRICS.items() if key is not None}
+    out["input_torque_ripple"] = float(np.std(result["input_shaft.torque"][mask]))
+    out["transmission_error"] = float(np.std(result["transmission_error"][mask]))
+    out["mesh_amplitude"] = mesh_amplitude(t[mask], result["driven.speed"][mask],
+                                           float(s["meshing_frequency_hz"]))
+    return out
+
+
+def mesh_amplitude(t: np.ndarray, x: np.ndarray, f: float) -> float:
+    """Amplitude of ``x`` at frequency ``f``: one-bin Fourier projection over the last whole
+    number of periods in the window (no leakage from the mean); nan below one period."""
+    if not (f > 0) or len(t) < 3:
+        return math.nan
+    periods = math.floor((t[-1] - t[0]) * f)
+    if periods < 1:
+        return math.nan
+    keep = t >= t[-1] - periods / f - 0.5 * (t[1] - t[0])
+    tt, xx = t[keep], x[keep] - np.mean(x[keep])
+    return float(2.0 * abs(np.mean(xx * np.exp(-2j * math.pi * f * tt))))
+
+
+def relative_errors(figs: dict, ref: dict) -> dict[str, float]:
+    """|figure - reference| / scale per figure; the scale is |reference|, for tensions at least
+    TENSION_FLOOR x the reference's mean tight tension."""
+    floor = TENSION_FLOOR * abs(ref["mean_tight_tension"])
+    out = {}
+    for k in METRICS:
+        scale = abs(ref[k])
+        if "tension" in k:
+            scale = max(scale, floor)
+        out[k] = abs(figs[k] - ref[k]) / scale if scale > 0 and math.isfinite(figs[k]) \
+            else math.nan
+    return out
+
+
+# --- running -------------------------------------------------------------------------------
+
+def _cache_key(scene: Scene) -> str:
+    blob = json.dumps({"parameters": {k: repr(v) for k, v in sorted(scene.parameters.items())},
+                       "duration": scene.duration, "interval": scene.output_interval,
+                       "operating": repr(scene.operating), "drive": repr(scene.drive)},
+                      sort_keys=True)
+    return hashlib.sha1(blob.encode()).hexdigest()[:16]
+
+
+def reference_figures(spec: SceneSpec, cache_dir: Path | None = None,
+                      log=lambda s: None) -> tuple[dict, float]:
+    """The reference's figures and its wall time per simulated second, cached on disk under
+    ``cache_dir`` by a hash of the whole scene (a change of any level-3 parameter reruns it)."""
+    base = spec.scene()
+    sc = base.with_overrides(**REFERENCE.overrides(base))
+    path = None
+    if cache_dir is not None:
+        path = Path(cache_dir) / f"ref_{_cache_key(sc)}.json"
+        if path.exists():
+            data = json.loads(path.read_text())
+            return data["figures"], data["cost"]
+    log(f"{spec.name}: reference {REFERENCE.label} ...")
+    wall = time.perf_counter()
+    r = run_scene(sc)
+    cost = (time.perf_counter() - wall) / float(r.time[-1])
+    figs = metrics(r)
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps({"scene": spec.name, "figures": figs, "cost": cost}))
+    return figs, cost
+
+
+def measure(scene: Scene, repeats: int = 3) -> dict:
+    """Figures, peak memory and median warm wall time per simulated second of ``scene``."""
+    run_scene(scene.with_overrides(duration=min(scene.duration, 20 * scene.output_interval)))
+    tracemalloc.start()
+    r = run_scene(scene)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    figs = metrics(r)
+    walls = []
+    for _ in range(repeats):
+        w = time.perf_counter()
+        r = run_scene(scene)
+        walls.append((time.perf_counter() - w) / float(r.time[-1]))
+    return {"figures": figs, "peak_memory_mb": peak / 2 ** 20,
+            "wall_per_sim_s": statistics.median(walls), "wall_spread": max(walls) - min(walls)}
+
+
+def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path | None = None,
+              log=lambda s: None) -> list[dict]:
+    """One tidy row per scene x configuration (see the module docstring)."""
+    rows = []
+    for spec in scenes:
+        base = spec.scene()
+        feats = scene_features(base)
+        ref, ref_cost = reference_figures(spec, cache_dir, log)
+        for cfg in configs:
+            row = {"scene": spec.name, "level": cfg.level, "level_name": FIDELITY_NAMES[cfg.level],
+                   "method": cfg.method, "tolerance": cfg.tolerance,
+                   "step_fraction": cfg.step_fraction, "config": cfg.label, **feats,
+                   "reference_wall_per_sim_s": ref_cost}
+            try:
+                sc = base.with_overrides(**cfg.overrides(base))
+                sc.check_operating_point(sc.model())
+            except ValueError as exc:
+                row.update(status="not valid here", note=str(exc).split(":")[0][:120])
+                rows.append(row)
+                log(f"{spec.name}: {cfg.label}: not valid here")
+                continue
+            try:
+                m = measure(sc, repeats)
+            except Exception as exc:  # noqa: BLE001 - recorded in the table, the study goes on
+                row.update(status="failed", note=f"{type(exc).__name__}: {exc}"[:160])
+                rows.append(row)
+                log(f"{spec.name}: {cfg.label}: failed ({type(exc).__name__})")
+                continue
+            err = relative_errors(m["figures"], ref)
+            row.update(status="ok", note="", wall_per_sim_s=m["wall_per_sim_s"],
+                       wall_spread=m["wall_spread"], peak_memory_mb=m["peak_memory_mb"],
+                       **{f"err_{k}": v for k, v in err.items()},
+                       **{f"value_{k}": m["figures"][k] for k in METRICS},
+                       **{f"ref_{k}": ref[k] for k in METRICS})
+            row["err_max"] = max(v for v in err.values() if math.isfinite(v))
+            rows.append(row)
+            log(f"{spec.name}: {cfg.label}: {m['wall_per_sim_s']:.3g} s/s, "
+                f"max error {100 * row['err_max']:.2f} %")
+    return rows
+
+
+def cold_costs(levels=(0, 1, 2, 3), preset: str = "xu2010", duration: float = 0.1) -> dict:
+    """Wall time of the first run in a fresh process (import + model + kernels from the
+    on-disk numba cache + run), per level, of ``preset`` for ``duration`` s."""
+    out = {}
+    for lv in levels:
+        code = ("import time; w = time.perf_counter(); import chainmodel; "
+                f"chainmodel.simulate({preset!r}, fidelity={lv}, duration={duration}); "
+                "print(time.perf_counter() - w)")
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        out[lv] = float(res.stdout.strip().splitlines()[-1]) if res.returncode == 0 else math.nan
+    return out
+
+
+# --- output --------------------------------------------------------------------------------
+
+COLUMNS = ("scene", "config", "level", "level_name", "method", "tolerance", "step_fraction",
+           "status", "wall_per_sim_s", "wall_spread", "peak_memory_mb",
+           *(f"err_{k}" for k in METRICS), "err_max",
+           "mesh_over_mode", "mesh_over_span", "load_over_static", "z1", "z2",
+           "reference_wall_per_sim_s", *(f"ref_{k}" for k in METRICS),
+           *(f"value_{k}" for k in METRICS), "note")
+
+
+def write_csv(rows: list[dict], path: str | Path, header: str = "") -> Path:
+    path = Path(path)
+    with path.open("w", newline="") as fh:
+        for line in header.splitlines():
+            fh.write(f"# {line}\n")
+        w = csv.DictWriter(fh, COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else
+                            (f"{r[k]:.6g}" if isinstance(r.get(k), float) else r[k]))
+                        for k in COLUMNS if k in r})
+    return path
+
+
+def read_csv(text: str) -> list[dict]:
+    """Rows of a study CSV (``# `` comment lines skipped), numbers as floats."""
+    return _parse_rows(text)
+
+
+def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
+    """The per-scene table (cost and every error) and the map of the cheapest configuration
+    meeting each target on all figures."""
+    short = {"mean_tight_tension": "tight mean", "peak_tight_tension": "tight peak",
+             "mean_slack_tension": "slack mean", "peak_slack_tension": "slack peak",
+             "driven_speed_ripple": "speed ripple", "input_torque_ripple": "torque ripple",
+             "mesh_amplitude": "mesh ampl.", "transmission_error": "TE"}
+    out = []
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        out.append(f"### {scene}\n")
+        out.append("| configuration | ms per simulated s | peak MB | "
+                   + " | ".join(f"{short[k]} %" for k in METRICS) + " |")
+        out.append("|" + "---|" * (3 + len(METRICS)))
+        for r in (r for r in rows if r["scene"] == scene):
+            if r["status"] != "ok":
+                out.append(f"| {r['config']} | {r['status']} |" + " |" * (1 + len(METRICS)))
+                continue
+            out.append(f"| {r['config']} | {1e3 * r['wall_per_sim_s']:.3g} | "
+                       f"{r['peak_memory_mb']:.3g} | " + " | ".join(
+                           f"{100 * r[f'err_{k}']:.2g}" for k in METRICS) + " |")
+        out.append("")
+    out.append("### Cheapest configuration meeting a target on every figure\n")
+    out.append("| scene | " + " | ".join(f"{100 * t:g} %" for t in targets) + " |")
+    out.append("|" + "---|" * (1 + len(targets)))
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        cells = []
+        for t in targets:
+            ok = [r for r in rows if r["scene"] == scene and r["status"] == "ok"
+                  and r["err_max"] <= t]
+            best = min(ok, key=lambda r: r["wall_per_sim_s"]) if ok else None
+            cells.append(f"{best['config']} ({1e3 * best['wall_per_sim_s']:.3g} ms/s)"
+                         if best else "none")
+        out.append(f"| {scene} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
+         targets=(0.01, 0.05, 0.20)) -> None:
+    """Error (largest over the figures) against cost, one curve per level and one panel per
+    scene; and the map of the lowest level meeting each target per scene."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    ncol = 4
+    nrow = math.ceil(len(scenes) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4 * ncol, 3.3 * nrow), squeeze=False)
+    colours = {0: "tab:blue", 1: "tab:orange", 2: "tab:green", 3: "tab:red"}
+    for ax, scene in zip(axes.flat, scenes):
+        for lv in range(4):
+            pts = sorted((r["wall_per_sim_s"], max(r["err_max"], 1e-5)) for r in rows
+                         if r["scene"] == scene and r["level"] == lv and r["status"] == "ok")
+            if pts:
+                ax.loglog(*zip(*pts), "o-", color=colours[lv], label=FIDELITY_NAMES[lv])
+        for t in targets:
+            ax.axhline(t, color="0.7", lw=0.8, ls="--")
+        ax.set_title(scene, fontsize=9)
+        ax.set_xlabel("wall s per simulated s")
+        ax.set_ylabel("largest relative error")
+    for ax in list(axes.flat)[len(scenes):]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(pareto_path, dpi=110)
+    plt.close(fig)
+
+    grid = np.full((len(scenes), len(targets)), -1.0)
+    for i, scene in enumerate(scenes):
+        for j, t in enumerate(targets):
+            ok = [r["level"] for r in rows if r["scene"] == scene and r["status"] == "ok"
+                  and r["err_max"] <= t]
+            grid[i, j] = min(ok) if ok else 4
+    fig, ax = plt.subplots(figsize=(5.5, 0.45 * len(scenes) + 1.2))
+    ax.imshow(grid, cmap=plt.get_cmap("viridis", 5), vmin=-0.5, vmax=4.5, aspect="auto")
+    for i in range(len(scenes)):
+        for j in range(len(targets)):
+            v = int(grid[i, j])
+            ax.text(j, i, FIDELITY_NAMES[v] if v < 4 else "none", ha="center", va="center",
+                    color="w" if v < 3 else "k", fontsize=8)
+    ax.set_xticks(range(len(targets)), [f"{100 * t:g} %" for t in targets])
+    ax.set_yticks(range(len(scenes)), scenes, fontsize=8)
+    ax.set_title("lowest level meeting the target on every figure", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(map_path, dpi=110)
+    plt.close(fig)
+
+
+# --- CLI: chainmodel bench tradeoff ---------------------------------------------------------
+
+def add_arguments(p) -> None:
+    """Options of ``chainmodel bench tradeoff`` (added to the ``bench`` parser)."""
+    g = p.add_argument_group("bench tradeoff (the study)")
+    g.add_argument("--scenes", default=None,
+                   help="comma-separated study scenes (default all: "
+                        + ", ".join(s.name for s in SCENES) + ")")
+    g.add_argument("--repeats", type=int, default=3, help="warm timed runs per configuration")
+    # defaults: this package's data file (what fidelity="auto" reads) and the checkout's docs
+    root = Path(__file__).resolve().parents[2]
+    g.add_argument("--csv", default=str(root / "chainmodel" / "data" / "tradeoff.csv"),
+                   help="CSV written (default: the package's own, read by fidelity='auto')")
+    g.add_argument("--markdown", default=str(root / "docs" / "tradeoff_results.md"),
+                   help="tables written")
+    g.add_argument("--figures", default=str(root / "docs" / "figures"),
+                   help="directory of the two plots ('' for none)")
+    g.add_argument("--cache-dir", default=str(Path.home() / ".cache" / "chainmodel" / "tradeoff"),
+                   help="where level-3 references are cached ('' for no cache)")
+    g.add_argument("--cold", action="store_true",
+                   help="also time the first run of each level in a fresh process")
+    g.add_argument("--fmu", action="store_true", help="also the FMU's cost per communication "
+                   "step at 1e-4 and 1e-3 s (builds the FMU; benchmarks/fmu_cost.py)")
+
+
+def run_cli(args) -> int:
+    import datetime
+    import os
+    import platform
+    names = {s.name: s for s in SCENES}
+    if args.scenes:
+        wanted = [n.strip() for n in args.scenes.split(",")]
+        bad = [n for n in wanted if n not in names]
+        if bad:
+            raise ValueError(f"--scenes: unknown scene(s) {bad}; valid: {', '.join(names)}")
+        scenes = [names[n] for n in wanted]
+    else:
+        scenes = list(SCENES)
+    if args.repeats < 1:
+        raise ValueError(f"--repeats must be >= 1, got {args.repeats}")
+
+    def log(msg):
+        sys.stderr.write(msg + "\n")
+        sys.stderr.flush()
+
+    start = time.perf_counter()
+    load = os.getloadavg()
+    rows = run_study(scenes, CONFIGS, args.repeats, Path(args.cache_dir) if args.cache_dir
+                     else None, log)
+    took = time.perf_counter() - start
+    header = (f"chainmodel bench tradeoff (issue 11), {datetime.date.today()}, "
+              f"{platform.machine()} {os.cpu_count()} cores, load average at start "
+              f"{load[0]:.2f}, {took:.0f} s; errors relative to level 3 verlet at h/4")
+    write_csv(rows, args.csv, header)
+    md = [f"<!-- written by `chainmodel bench tradeoff`: {header} -->\n", markdown(rows)]
+    if args.cold:
+        cold = cold_costs()
+        md.append("\nCold start (first run in a fresh process, import + kernels from the numba "
+                  "cache + 0.1 s of xu2010): " + ", ".join(
+                      f"level {lv} {v:.2f} s" for lv, v in cold.items()) + "\n")
+    if args.fmu:
+        md.append(fmu_section())
+    Path(args.markdown).write_text("\n".join(md))
+    if args.figures:
+        fig = Path(args.figures)
+        fig.mkdir(parents=True, exist_ok=True)
+        plot(rows, fig / "tradeoff_pareto.png", fig / "tradeoff_map.png")
+    print(markdown(rows), end="")
+    log(f"wrote {args.csv} and {args.markdown} in {took:.0f} s")
+    return 0
+
+
+def fmu_section() -> str:
+    """The FMU's cost per communication step on xu2010 at 1e-4 and 1e-3 s, measured by
+    benchmarks/fmu_cost.py (which must be importable: run from the repository root)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    import fmu_cost  # noqa: PLC0415 - a benchmark script, not part of the package
+    lines = ["\n### FMU path (xu2010, 120 rpm; benchmarks/fmu_cost.py)\n",
+             "| level | step 1e-4 s: us per step | step 1e-3 s: us per step |", "|---|---|---|"]
+    res = {h: fmu_cost.fmu_step_cost(steps=100, repeats=5, h=h) for h in (1e-4, 1e-3)}
+    for lv in (0, 1, 2, 3):
+        lines.append(f"| {lv} | " + " | ".join(
+            f"{1e6 * res[h]['levels'][lv]['chaindrive_s']:.0f}" for h in (1e-4, 1e-3)) + " |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,288 @@
+"""``fidelity = "auto"``: the cheapest level and stepper that the measured trade table says meet
+an accuracy target on the outputs asked for (issue 11; docs/tradeoff.md).
+
+The table is chainmodel/data/tradeoff.csv, written by ``chainmodel bench tradeoff``
+(:mod:`chainmodel.analysis.trade_study`): per measured scene and configuration (level x stepper
+x tolerance or step), the wall time per simulated second and the relative error of eight
+figures against a converged level-3 reference. :func:`choose`
+
+1. maps the requested outputs to the figures that measure them (:data:`OUTPUT_FIGURES`); an
+   output that only level 3 computes (:data:`LEVEL3_ONLY`: levels 0-2 give quasi-static
+   estimates) forces level 3, the midspan deflection forces level >= 2;
+2. finds the nearest measured scene: the Euclidean distance between the natural logarithms of
+   the dimensionless groups of :func:`scene_features` (meshing frequency over the lowest
+   quasi-static mode and over the first span mode, 1 + load over static tension, both tooth
+   counts); the answer is *extrapolated* when that distance exceeds 1 (the scene is more than
+   a factor e = 2.7 away in one group, or a factor 2 in two: xu2010 at 60 rpm, between the
+   measured 30 and 120 rpm, is at 0.98) or the scene's meshing frequency is more than a factor
+   2 beyond the table's range of mesh_over_mode;
+3. takes on that scene the cheapest configuration whose error on every requested figure is at
+   most ``accuracy`` and which the scene accepts (level 0 refuses speeds above half its lowest
+   quasi-static mode, level 2 a slack span); if none meets the target, the most accurate one,
+   and says so.
+
+Physics does not import this module (the library's ``simulate``, the CLI and the FMU adapter
+do).
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+
+from .models import ALL_OUTPUTS
+from .parameters import FIDELITY_NAMES
+
+__all__ = ["AutoChoice", "choose", "scene_features", "table", "OUTPUT_FIGURES", "LEVEL3_ONLY",
+           "FIGURES", "DEFAULT_ACCURACY", "validate_request", "parse_rows"]
+
+log = logging.getLogger("chainmodel.fidelity_auto")
+
+#: the figures of the table (chainmodel.analysis.trade_study.METRICS)
+FIGURES = ("mean_tight_tension", "peak_tight_tension", "mean_slack_tension",
+           "peak_slack_tension", "driven_speed_ripple", "input_torque_ripple", "mesh_amplitude",
+           "transmission_error")
+#: output name -> the figures of the table that measure it
+OUTPUT_FIGURES = {
+    "tight_span.tension": ("mean_tight_tension", "peak_tight_tension"),
+    "slack_span.tension": ("mean_slack_tension", "peak_slack_tension"),
+    "driven.speed": ("driven_speed_ripple", "mesh_amplitude"),
+    "driven.acceleration": ("driven_speed_ripple", "mesh_amplitude"),
+    "velocity_ratio": ("driven_speed_ripple", "mesh_amplitude"),
+    "input_shaft.torque": ("input_torque_ripple",),
+    "transmission_error": ("transmission_error",),
+    "driven.angle": ("transmission_error",),
+    # exact at every level (the input's own motion, the geometry of the polygon)
+    "driver.angle": (), "driver.speed": (), "tight_span.length": (),
+}
+#: outputs only level 3 computes; levels 0-2 report quasi-static estimates (output_descriptions)
+LEVEL3_ONLY = ("chain.max_link_tension", "contact.max_force", "chain.min_link_tension")
+#: outputs zero below level 2 (no transverse span motion)
+LEVEL2_UP = ("tight_span.midspan_deflection",)
+DEFAULT_ACCURACY = 0.05
+#: nearest-scene distance (natural-log units) beyond which the choice is called extrapolated
+EXTRAPOLATION_DISTANCE = 1.0
+
+
+def scene_features(scene) -> dict[str, float]:
+    """Dimensionless groups that place a scene among the measured ones:
+
+    * ``mesh_over_mode``: meshing frequency z1 n / 60 over the lowest quasi-static mode of the
+      drive (the driven sprocket's torsional or the spans' first axial frequency, the one
+      level 0 is limited by: it refuses above 0.5);
+    * ``mesh_over_span``: meshing frequency over the first transverse frequency of a span of
+      length (N + f) p at the static tension T0, (1 / 2L) sqrt(T0 / rho) (resonance near 1, 2);
+    * ``load_over_static``: the load's span tension, load torque / r_o, over T0 (above about 1
+      the slack span unloads towards zero);
+    * ``z1``, ``z2``: the tooth counts (polygonal action ~ 1 / z)."""
+    model = scene.with_overrides(fidelity=0).model()
+    d = scene.drive
+    f_mesh = d.n_driver * abs(scene.operating.speed) / (2 * math.pi)
+    f_t, f_ax = model._frequencies
+    t0 = max(float(model.static_tension()), 1e-9)
+    rho = scene.parameters["chain.link_mass"] / d.pitch
+    f_span = math.sqrt(t0 / rho) / (2 * (d.span_pitches + d.pitch_fraction) * d.pitch)
+    load = abs(scene.operating.load_torque) / d.driven.pitch_radius
+    return {"mesh_over_mode": f_mesh / min(f_t, f_ax), "mesh_over_span": f_mesh / f_span,
+            "load_over_static": load / t0, "z1": float(d.n_driver), "z2": float(d.n_driven)}
+
+
+def _log_groups(f: dict) -> tuple[float, ...]:
+    # log(x + small) so that 0 rpm (mesh ratios 0) stays finite: it sits far below every
+    # measured scene and is called extrapolated, as it should be
+    return (math.log(f["mesh_over_mode"] + 1e-3), math.log(f["mesh_over_span"] + 1e-3),
+            math.log(1.0 + f["load_over_static"]), math.log(f["z1"]), math.log(f["z2"]))
+
+
+@lru_cache(maxsize=None)
+def table() -> tuple[dict, ...]:
+    """Rows of chainmodel/data/tradeoff.csv (numbers as floats; '' as None)."""
+    return tuple(parse_rows(resources.files(__package__).joinpath("data", "tradeoff.csv")
+                            .read_text()))
+
+
+def parse_rows(text: str) -> list[dict]:
+    """Rows of a trade-study CSV (``#`` comment lines skipped; numbers as floats, '' as None)."""
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
+    rows = []
+    for r in csv.DictReader(lines):
+        out = {}
+        for k, v in r.items():
+            if k in ("scene", "config", "level_name", "method", "status", "note"):
+                out[k] = v
+            elif k == "level":
+                out[k] = int(v)
+            else:
+                out[k] = float(v) if v not in ("", None) else None
+        rows.append(out)
+    return rows
+
+
+@dataclass
+class AutoChoice:
+    """What :func:`choose` picked and why."""
+    level: int
+    overrides: dict               # scene overrides: fidelity, solver_method, solver_tolerance...
+    config: str                   # the table's name of the configuration
+    expected_error: float         # largest table error over the requested figures
+    figures: tuple                # the requested figures
+    source_scene: str             # nearest measured scene
+    distance: float
+    extrapolated: bool
+    met: bool                     # the table says the target is met
+    accuracy: float
+    notes: list = field(default_factory=list)
+
+    @property
+    def message(self) -> str:
+        what = ", ".join(self.figures) or "no measured figure"
+        s = (f"fidelity auto: {self.config} ({FIDELITY_NAMES[self.level]}), expected error "
+             f"{100 * self.expected_error:.3g} % on {what} against a converged level 3 "
+             f"(target {100 * self.accuracy:g} %{'' if self.met else ', NOT met by any measured configuration'}); "
+             f"source: chainmodel/data/tradeoff.csv, scene '{self.source_scene}' at distance "
+             f"{self.distance:.2f}")
+        if self.extrapolated:
+            s += " (extrapolated: this scene is outside the measured ones)"
+        if self.notes:
+            s += "; " + "; ".join(self.notes)
+        return s
+
+
+def validate_request(outputs, accuracy) -> tuple[tuple[str, ...], float]:
+    """Check and normalise ``outputs`` (names of outputs or figures; None: all figures) and
+    ``accuracy`` (a relative error in (0, 1]); ValueError naming the parameter otherwise."""
+    known = set(OUTPUT_FIGURES) | set(LEVEL3_ONLY) | set(LEVEL2_UP) | set(FIGURES)
+    if outputs is None:
+        outputs = FIGURES
+    elif isinstance(outputs, str):
+        outputs = tuple(o.strip() for o in outputs.split(",") if o.strip())
+    else:
+        outputs = tuple(outputs)
+    if not outputs:
+        raise ValueError("outputs must name at least one output, got an empty list; valid: "
+                         + ", ".join(sorted(known)))
+    bad = [o for o in outputs if not isinstance(o, str) or o not in known]
+    if bad:
+        raise ValueError(f"outputs {bad} not known to fidelity='auto'; valid: "
+                         + ", ".join(sorted(known)))
+    if accuracy is None:
+        accuracy = DEFAULT_ACCURACY
+    try:
+        acc = float(accuracy)
+    except (TypeError, ValueError):
+        acc = math.nan
+    if isinstance(accuracy, bool) or not (0.0 < acc <= 1.0):
+        raise ValueError(f"accuracy must be a relative error in (0, 1] (0.05 = 5 %), "
+                         f"got {accuracy!r}")
+    return outputs, acc
+
+
+def _accepts(scene, level: int) -> bool:
+    try:
+        sc = scene.with_overrides(fidelity=level)
+        sc.check_operating_point(sc.model())
+    except ValueError:
+        return False
+    return True
+
+
+def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
+    """The cheapest configuration the table says meets ``accuracy`` on ``outputs`` for
+    ``scene`` (see the module docstring)."""
+    outputs, accuracy = validate_request(outputs, accuracy)
+    rows = table() if rows is None else rows
+    min_level, notes = 0, []
+    if any(o in LEVEL3_ONLY for o in outputs):
+        min_level = 3
+        notes.append("level 3 forced: " + ", ".join(o for o in outputs if o in LEVEL3_ONLY)
+                     + " are quasi-static estimates below it")
+    elif any(o in LEVEL2_UP for o in outputs):
+        min_level = 2
+        notes.append("level >= 2 forced: the midspan deflection is zero below it")
+    figs = tuple(dict.fromkeys(f for o in outputs
+                               for f in (OUTPUT_FIGURES.get(o, ()) if o not in FIGURES else (o,))))
+    here = _log_groups(scene_features(scene))
+    by_scene: dict[str, list] = {}
+    for r in rows:
+        by_scene.setdefault(r["scene"], []).append(r)
+    dist = {}
+    for name, rs in by_scene.items():
+        there = _log_groups(rs[0])
+        dist[name] = math.sqrt(sum((a - b) ** 2 for a, b in zip(here, there)))
+    source = min(dist, key=dist.get)
+    f_here = scene_features(scene)["mesh_over_mode"]
+    span = [r["mesh_over_mode"] for r in rows]
+    extrapolated = dist[source] > EXTRAPOLATION_DISTANCE or not (
+        0.5 * min(span) <= f_here <= 2.0 * max(span))
+
+    def error(r):
+        errs = [r[f"err_{f}"] for f in figs]
+        errs = [e for e in errs if e is not None and math.isfinite(e)]
+        return max(errs) if errs else 0.0
+
+    cands = [r for r in by_scene[source] if r["status"] == "ok" and r["level"] >= min_level
+             and (not figs or all(r[f"err_{f}"] is not None for f in figs))]
+    accepted = {lv: _accepts(scene, lv) for lv in {r["level"] for r in cands}}
+    cands = [r for r in cands if accepted[r["level"]]]
+    if not cands:
+        raise ValueError(f"fidelity='auto' found no configuration of level >= {min_level} "
+                         f"measured on '{source}' that this scene accepts")
+    meeting = [r for r in cands if error(r) <= accuracy]
+    met = bool(meeting)
+    best = (min(meeting, key=lambda r: r["wall_per_sim_s"]) if met
+            else min(cands, key=lambda r: (error(r), r["wall_per_sim_s"])))
+    choice = AutoChoice(best["level"], _overrides(scene, best), best["config"], error(best),
+                        figs, source, dist[source], extrapolated, met, accuracy, notes)
+    log.info(choice.message)
+    return choice
+
+
+def _overrides(scene, row) -> dict:
+    lv = row["level"]
+    out = {"fidelity": lv}
+    if lv == 0:
+        return out
+    out["solver_method"] = row["method"]
+    if row.get("tolerance") is not None:
+        out["solver_tolerance"] = row["tolerance"]
+    frac = row.get("step_fraction")
+    if frac is not None:
+        if frac == 1.0:
+            out["solver_step"] = 0.0          # level 3's own step
+        else:
+            sc = scene.with_overrides(fidelity=lv, solver_method=row["method"], solver_step=0.0)
+            out["solver_step"] = float(sc.stepper().h) * frac
+    return out
+
+
+def output_names() -> tuple[str, ...]:
+    return tuple(o.name for o in ALL_OUTPUTS)
+
+
+#: units of the FMU adapter's Real auto.* parameters (build_fmu.py writes them)
+FMU_UNITS = {"auto.accuracy": "1", "auto.input_speed": "rad/s", "auto.load_torque": "N.m"}
+#: the FMU adapter's auto.* parameters (names)
+FMU_PARAMETERS = ("auto.enabled", "auto.outputs", *FMU_UNITS)
+
+#: scene override keyword -> parameter name (for callers holding a parameter dict: the FMU)
+_PARAM_OF = {"fidelity": "fidelity", "solver_method": "solver.method",
+             "solver_tolerance": "solver.tolerance", "solver_step": "solver.step"}
+
+
+def choose_parameters(params: dict, speed: float, load_torque: float, outputs=None,
+                      accuracy=None) -> tuple[dict, AutoChoice]:
+    """:func:`choose` for a validated parameter dict and an expected steady operating point
+    (input speed [rad/s], load torque [N.m]); returns the parameters with fidelity and the
+    solver settings replaced, and the choice. The FMU adapter calls this (it holds no physics
+    and no selection logic of its own)."""
+    from .scene import OperatingPoint, Scene
+    sc = Scene("fmu", dict(params), OperatingPoint(abs(float(speed)), 0.05, float(load_torque)))
+    choice = choose(sc, outputs, accuracy)
+    new = dict(params)
+    for key, value in choice.overrides.items():
+        new[_PARAM_OF[key]] = value
+    return new, choice
