@@ -164,9 +164,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     if model.n_states == 0 and hasattr(model, "evaluate") and not snapshot_every:
         # stateless level: every sample at once (vectorised over time)
         wall = _time.perf_counter()
-        u = [scene.inputs(float(t)) for t in times]
-        data = model.evaluate(*(np.array([getattr(v, k) for v in u]) for k in
-                                ("angle", "speed", "acceleration", "torque")))
+        data = model.evaluate(*scene.input_arrays(times))
         wall = _time.perf_counter() - wall
         return Result(scene, times, data, model.output_descriptions(), wall,
                       {"steps": 0, "rhs_evaluations": 0, "events": 0, "wall_time": wall},
