@@ -370,6 +370,7 @@ class OutputCheck:
     y_min: np.ndarray
     y_max: np.ndarray
     t_band: np.ndarray
+    error: str | None = None
 
 
 def tube(ref: Reference, name: str, t: np.ndarray, y: np.ndarray) -> OutputCheck:
@@ -414,11 +415,23 @@ def fmu_variables(fmu: Path) -> tuple[list[str], list[str]]:
 def check(fmu: str | Path, references: Sequence[Reference], host: str = "fmpy"
           ) -> list[OutputCheck]:
     """Run ``fmu`` with ``host`` through every reference; one OutputCheck per scenario and
-    output, in reference order."""
+    output, in reference order. A run the FMU refuses or abandons (initialization refused, a
+    step discarded) fails every output of that scenario, with the reason as ``error``."""
+    from ..fmu_hosts import HostUnavailable
     fmu = Path(fmu)
     results = []
     for ref in references:
-        run = _run(fmu, ref, host)
+        try:
+            run = _run(fmu, ref, host)
+        except HostUnavailable:
+            raise
+        except Exception as exc:      # the FMU failed this scenario: a regression, not a usage error
+            why = " ".join(str(exc).split()) or type(exc).__name__
+            empty = np.array([])
+            results += [OutputCheck(ref.name, n, False, math.inf, math.nan, len(ref.time),
+                                    empty, empty, empty, empty, empty, error=why)
+                        for n in ref.outputs]
+            continue
         for name in ref.outputs:
             results.append(tube(ref, name, run.time, run.outputs[name]))
     return results
@@ -476,7 +489,9 @@ def plot_worst(results: Sequence[OutputCheck], path: str | Path, count: int = 6)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    worst = sorted(results, key=lambda r: -r.worst)[:count]
+    worst = sorted((r for r in results if r.error is None), key=lambda r: -r.worst)[:count]
+    if not worst:
+        raise ValueError("no output ran, nothing to plot")
     fig, axes = plt.subplots(len(worst), 1, figsize=(8, 2.2 * len(worst)), squeeze=False)
     for ax, r in zip(axes[:, 0], worst):
         ax.fill_between(r.t_band, r.y_min, r.y_max, color="0.85", label="tube")
@@ -491,6 +506,105 @@ def plot_worst(results: Sequence[OutputCheck], path: str | Path, count: int = 6)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
+
+
+# --- command line ------------------------------------------------------------------------------
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "fmu-test", help="regression-test an FMU against reference sets (FMI Cross-Check layout)",
+        description="Run FMU through a host against reference sets in the FMI Cross-Check layout "
+                    "and compare every output with fmpy's tube (fmpy.util.validate_signal). "
+                    "One line per scenario and output; exit 0 when all pass, 1 when any fails, "
+                    "2 for bad usage or input. docs/fmu.md, 'Regression testing your FMU'.")
+    p.add_argument("fmu", metavar="FMU", help="the FMU file, e.g. dist/ChainDrive.fmu")
+    p.add_argument("--references", metavar="DIR",
+                   help="reference set (a folder of scenario folders, or one scenario folder); "
+                        "default: the set shipped in the FMU's documentation/fmu_references")
+    p.add_argument("--host", choices=("fmpy", "libcosim"), default="fmpy",
+                   help="importer that runs the FMU (default fmpy)")
+    p.add_argument("--record", metavar="DIR",
+                   help="instead of comparing, write a new reference set from the FMU itself "
+                        "into DIR (the inputs of --references, or of --scene)")
+    p.add_argument("--scene", metavar="TOML",
+                   help="with --record: record this scene (TOML file or preset name) instead")
+    p.add_argument("--plot", metavar="FILE",
+                   help="figure of the worst deviations (needs matplotlib)")
+    p.set_defaults(handler=cmd_fmu_test)
+
+
+def _shipped_references(fmu: Path, tmp: Path) -> Path:
+    import zipfile
+    try:
+        with zipfile.ZipFile(fmu) as z:
+            members = [m for m in z.namelist() if m.startswith("documentation/fmu_references/")]
+            if not members:
+                raise ValueError(f"{fmu} ships no documentation/fmu_references; give "
+                                 "--references DIR")
+            z.extractall(tmp, members)
+    except zipfile.BadZipFile:
+        raise ValueError(f"FMU {str(fmu)!r} is not a zip file (an FMU is)") from None
+    return tmp / "documentation" / "fmu_references"
+
+
+def cmd_fmu_test(args) -> int:
+    import sys
+    import tempfile
+    from ..fmu_hosts import HostUnavailable
+    fmu = Path(args.fmu)
+    if not fmu.is_file():
+        raise ValueError(f"FMU {args.fmu!r} does not exist; build it with `python build_fmu.py`")
+    if args.scene and not args.record:
+        raise ValueError("--scene is for --record DIR (record a scene as a new reference)")
+    try:
+        outputs, inputs = fmu_variables(fmu)
+    except Exception as exc:
+        raise ValueError(f"{fmu}: cannot read its modelDescription.xml ({exc})") from None
+    with tempfile.TemporaryDirectory(prefix="chaindrive_fmu_test_") as tmp:
+        try:
+            if args.record and args.scene:
+                folder = scene_reference(args.scene, args.record, fmu, args.host)
+                print(f"recorded {folder}")
+                return 0
+            root = Path(args.references) if args.references else \
+                _shipped_references(fmu, Path(tmp))
+            refs = [r for r in read_references(root, outputs)]
+            for r in refs:
+                bad = [n for n in r.inputs if n not in inputs]
+                if bad:
+                    raise ReferenceError(f"{r.path / 'in.csv'}: {', '.join(bad)} not inputs of "
+                                         f"{fmu.name}")
+            if args.record:
+                for folder in record(fmu, refs, args.record, args.host):
+                    print(f"recorded {folder}")
+                return 0
+            results = check(fmu, refs, args.host)
+        except HostUnavailable as exc:
+            raise ValueError(str(exc)) from None
+    width = max(len(r.scenario) for r in results)
+    owidth = max(len(r.output) for r in results)
+    for r in results:
+        verdict = "pass" if r.passed else "FAIL"
+        if r.error is not None:
+            print(f"{verdict} {r.scenario:<{width}} {r.output:<{owidth}} run failed: {r.error}")
+        else:
+            print(f"{verdict} {r.scenario:<{width}} {r.output:<{owidth}} worst {r.worst:.3g} of "
+                  f"the tube at t = {r.at:.6g} s" + (f" ({r.outside} samples outside)"
+                                                    if r.outside else ""))
+    failed = [r for r in results if not r.passed]
+    moved = sorted({r.output for r in failed})
+    print(f"fmu-test: {len(results) - len(failed)} of {len(results)} outputs pass in "
+          f"{len(refs)} scenarios ({args.host})"
+          + (f"; outputs that moved: {', '.join(moved)}" if moved else ""))
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            print("fmu-test: no figure, matplotlib is not installed (pip install "
+                  "'chainmodel[plot]')", file=sys.stderr)
+        else:
+            print(f"wrote {plot_worst(results, args.plot)}")
+    return 1 if failed else 0
 
 
 def main_generate(argv=None) -> int:
