@@ -12,16 +12,17 @@ rules (github.com/modelica/fmi-cross-check):
 
 The committed set (``references/`` at the top of the repository, shipped inside the FMU as
 ``documentation/fmu_references/``) is produced by the *library* (:func:`make_references`:
-``Scene`` + ``Stepper.advance`` with the exact, continuous input profile), a path independent of
-the FMU adapter, pythonfmu and the host. :func:`check` runs an FMU through a host
-(:func:`chainmodel.fmu_hosts.run_fmu`) and compares every output with fmpy's own tube,
-:func:`fmpy.util.validate_signal` (the Modelica Association csv-compare band):
+``Scene`` model + ``Stepper.advance`` with the inputs of ``in.csv`` held over each step, as a
+fixed-step FMI master holds them), a path independent of the FMU adapter, pythonfmu and the
+host. :func:`check` runs an FMU through a host (:func:`chainmodel.fmu_hosts.run_fmu`) and
+compares every output with fmpy's own tube, :func:`fmpy.util.validate_signal` (the Modelica
+Association csv-compare band):
 
 * vertical half-width ``RelTol`` x (range of the reference output): the stated accuracy of the
   level (:data:`ACCURACY`, docs/fmu.md "Regression testing your FMU");
-* horizontal width: one communication step on either side of each reference sample, because a
-  host holds the inputs over a step (the FMU sees each input up to one step late; the library
-  reference sees the exact profile).
+* horizontal width: one communication step on either side of each reference sample: a master
+  may read the outputs of t_k before or after setting the inputs of t_k (direct feedthrough),
+  and hosts place communication points by integer nanoseconds or floating-point sums.
 
 No physics here; this module is an analysis tool and is never imported by the models.
 """
