@@ -18,7 +18,10 @@ Steps:
    module is ``resources/chaindrive_<id>.py`` (see SHIM), so any number of different builds
    coexist in one process and none touches the host's own ``chainmodel``;
 2. let pythonfmu build the FMU (entry module, its own pythonfmu copy, the binaries,
-   documentation/);
+   documentation/: docs/fmu.md as index.html, docs/fmu_reference.csv as ChainDrive_ref.csv and
+   the regression references references/ as fmu_references/, which ``chainmodel fmu-test``
+   uses); ``--default NAME=VALUE`` writes ``resources/_vendor/defaults.json``, which the
+   adapter's parameters start from, and the same value as the start value in the XML;
 3. complete the modelDescription.xml pythonfmu writes: unit definitions with SI base units and
    display units, a unit on every Real, min/max of the parameters, explicit causality /
    variability / initial, output descriptions that say at which fidelity levels each output is

@@ -96,6 +96,9 @@ def test_perturbed_link_stiffness_fails_naming_the_outputs(tmp_path, capsys):
                            "--default", f"chain.link_stiffness={k!r}"],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
+    with zipfile.ZipFile(fmu) as z:
+        xml = z.read("modelDescription.xml").decode()
+    assert f'start="{k!r}"' in xml or f'start="{k:.0f}"' in xml
     refs = _subset(tmp_path, ["L0_load_step", "L1_load_step"])
     assert main(["fmu-test", str(fmu), "--references", str(refs)]) == 1
     out = capsys.readouterr().out
@@ -107,6 +110,14 @@ def test_perturbed_link_stiffness_fails_naming_the_outputs(tmp_path, capsys):
     summary = out.strip().splitlines()[-1]
     assert "outputs that moved:" in summary and "tight_span.tension" in summary
     assert "driver.angle" not in summary
+
+
+def test_build_refuses_an_unknown_default(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--out",
+                           str(tmp_path / "x.fmu"), "-q", "--default", "chain.nope=3"],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2
+    assert "chain.nope" in proc.stderr and not (tmp_path / "x.fmu").exists()
 
 
 def test_record_then_check_passes(chaindrive_fmu, tmp_path, capsys):
