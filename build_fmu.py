@@ -8,6 +8,9 @@
     python build_fmu.py --doc               # also rewrite the variable table in docs/fmu.md
     python build_fmu.py --warm 0,1,2,3      # compile these levels' kernels for this machine now
                                             # (default 0,1,2; --warm none skips)
+    python build_fmu.py --default chain.link_stiffness=1.02e8 --out other.fmu
+                                            # other parameter defaults (start values), e.g.
+                                            # a user's own drive, or a perturbed build for tests
 
 Steps:
 1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` and the
@@ -17,7 +20,10 @@ Steps:
    module is ``resources/chaindrive_<id>.py`` (see SHIM), so any number of different builds
    coexist in one process and none touches the host's own ``chainmodel``;
 2. let pythonfmu build the FMU (entry module, its own pythonfmu copy, the binaries,
-   documentation/);
+   documentation/: docs/fmu.md as index.html, docs/fmu_reference.csv as ChainDrive_ref.csv and
+   the regression references references/ as fmu_references/, which ``chainmodel fmu-test``
+   uses); ``--default NAME=VALUE`` writes ``resources/_vendor/defaults.json``, which the
+   adapter's parameters start from, and the same value as the start value in the XML;
 3. complete the modelDescription.xml pythonfmu writes: unit definitions with SI base units and
    display units, a unit on every Real, min/max of the parameters, explicit causality /
    variability / initial, output descriptions that say at which fidelity levels each output is
@@ -53,6 +59,7 @@ sys.path.insert(0, str(HERE))  # describe the chainmodel we vendor, not another 
 ADAPTER = HERE / "fmu_src" / "ChainDrive.py"
 DEFAULT_OUT = HERE / "dist" / "ChainDrive.fmu"
 REFERENCE_CSV = HERE / "docs" / "fmu_reference.csv"
+REFERENCES = HERE / "references"
 DOC_MD = HERE / "docs" / "fmu.md"
 
 #: SI base-unit exponents of the unit symbols the schema and the outputs use
@@ -216,7 +223,7 @@ def complete_model_description(xml: bytes, meta: dict) -> bytes:
                 typ.set("displayUnit", du)
                 used[unit].add(du)
             if name in params:   # exact default (pythonfmu rounds to 16 digits)
-                typ.set("start", fmt(params[name].default))
+                typ.set("start", fmt(meta.get("defaults", {}).get(name, params[name].default)))
             elif typ.get("start") is not None:
                 typ.set("start", fmt(float(typ.get("start"))))
         if name in params and typ.tag in ("Real", "Integer"):
@@ -342,6 +349,9 @@ def stage_documentation(dest: Path) -> None:
     (dest / "index.html").write_text(markdown_to_html(text, "ChainDrive FMU"))
     if REFERENCE_CSV.is_file():
         shutil.copy2(REFERENCE_CSV, dest / "ChainDrive_ref.csv")
+    if REFERENCES.is_dir():   # the regression references (chainmodel fmu-test), Cross-Check layout
+        shutil.copytree(REFERENCES, dest / "fmu_references",
+                        ignore=shutil.ignore_patterns(".*", "__pycache__"))
 
 
 # --- build -----------------------------------------------------------------------------------
@@ -385,18 +395,28 @@ _sys.modules["{adapter}"].balance_namespace_reference(globals())
 '''
 
 
-def build(out: Path = DEFAULT_OUT, quiet: bool = False) -> Path:
-    """Build, complete and validate the FMU at ``out``; return its path."""
+def build(out: Path = DEFAULT_OUT, quiet: bool = False,
+          defaults: dict | None = None) -> Path:
+    """Build, complete and validate the FMU at ``out``; return its path. ``defaults``: parameter
+    name -> value replacing the library's default in this build (the start value in
+    modelDescription.xml and the value an instance starts with; ``_vendor/defaults.json``)."""
     from pythonfmu import FmuBuilder
 
     out = Path(out).resolve()
     meta = library_metadata()
+    defaults = dict(defaults or {})
+    if defaults:
+        from chainmodel import parameters as P
+        P.validate(defaults)      # ValueError naming the parameter, the value, the valid range
+        meta["defaults"] = {k: P.BY_NAME[k].kind(v) for k, v in defaults.items()}
     with tempfile.TemporaryDirectory(prefix="chaindrive_build_") as tmp:
         tmp = Path(tmp)
         vendor = tmp / "stage" / "_vendor"
         shutil.copytree(HERE / "chainmodel", vendor / "chainmodel",
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
         shutil.copy2(ADAPTER, vendor / "ChainDrive.py")
+        if defaults:
+            (vendor / "defaults.json").write_text(json.dumps(meta["defaults"], sort_keys=True))
         bid = build_id(vendor)
         import pythonfmu
         (vendor / "build.json").write_text(json.dumps({"id": bid,
@@ -438,6 +458,18 @@ def write_reference(fmu: Path, path: Path = REFERENCE_CSV) -> Path:
     return path
 
 
+def _literal(text: str):
+    """A --default value: true/false, an int, a float, else the text."""
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT, help="FMU file to write")
@@ -445,13 +477,24 @@ def main(argv=None) -> int:
                     help="regenerate docs/fmu_reference.csv with the FMU just built")
     ap.add_argument("--doc", action="store_true",
                     help="rewrite the generated variable table in docs/fmu.md")
+    ap.add_argument("--default", action="append", default=[], metavar="NAME=VALUE",
+                    help="build with another default (start value) of a parameter; repeatable")
     ap.add_argument("--warm", default="0,1,2", metavar="LEVELS",
                     help="fidelity levels whose compiled kernels to cache for this machine after "
                          "the build, comma-separated (default 0,1,2; 'none' skips)")
     ap.add_argument("-q", "--quiet", action="store_true")
     args = ap.parse_args(argv)
     levels = parse_levels(ap, args.warm)
-    fmu = build(args.out, quiet=args.quiet)
+    defaults = {}
+    for item in args.default:
+        name, sep, value = item.partition("=")
+        if not sep:
+            ap.error(f"--default {item!r}: write NAME=VALUE")
+        defaults[name.strip()] = _literal(value.strip())
+    try:
+        fmu = build(args.out, quiet=args.quiet, defaults=defaults)
+    except ValueError as exc:
+        ap.error(f"--default: {exc}")
     if args.doc:
         from chainmodel.fmu import update_doc_table
         update_doc_table(fmu, DOC_MD)
@@ -459,7 +502,7 @@ def main(argv=None) -> int:
     if args.reference:
         write_reference(fmu)
     if args.doc or args.reference:   # ship the new documentation / reference in the FMU too
-        build(args.out, quiet=True)
+        build(args.out, quiet=True, defaults=defaults)
     warm(fmu, levels, quiet=args.quiet)
     return 0
 

@@ -7,6 +7,7 @@ Subcommands (``chainmodel SUBCOMMAND --help`` for the flags; docs/cli.md for the
     chainmodel wrap (--preset NAME | ... --links M) [--json]
     chainmodel presets [--json]
     chainmodel cache [--info | --clear] [--json]
+    chainmodel fmu-test FMU [--references DIR] [--host fmpy|libcosim] [--record DIR] [--plot F] [--scene TOML]
 
 Conventions: SI units everywhere except the flags that say otherwise (``--speed-rpm``);
 ``--json`` prints exactly one JSON object on stdout (snake_case keys, SI units, ``null`` for a
@@ -81,6 +82,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.analysis.tradeoff", "register"),
     ("chainmodel.analysis.sweep.cli", "register"),
     ("chainmodel.cache", "register"),
+    ("chainmodel.analysis.fmu_test", "register"),
 ]
 
 

@@ -132,6 +132,14 @@ def _build_info(resources: Path) -> dict:
     return _BUILD_INFO[key]
 
 
+def _build_defaults(resources: Path) -> dict:
+    """Parameter defaults this build replaces (``build_fmu.py --default``), else {}."""
+    try:
+        return json.loads((resources / "_vendor" / "defaults.json").read_text())
+    except (OSError, ValueError):
+        return {}
+
+
 #: log messages already passed to pythonfmu, see ChainDrive.log
 _MESSAGES: dict = {}
 _MESSAGES_MAX = 4096
@@ -341,10 +349,11 @@ class ChainDrive(Fmi2Slave):
             self._output_map.append((vr, spec.name))
         kinds = {float: (Real, self._real), int: (Integer, self._int),
                  bool: (Boolean, self._bool), str: (String, self._str)}
+        defaults = _build_defaults(Path(self.resources))
         for p in self._P.PARAMETERS:
             cls, table = kinds[p.kind]
             variability = Fmi2Variability.fixed if p.structural else Fmi2Variability.tunable
-            vr = self._add(cls, p.name, p.kind(p.default), table,
+            vr = self._add(cls, p.name, p.kind(defaults.get(p.name, p.default)), table,
                            causality=Fmi2Causality.parameter, variability=variability,
                            initial=Fmi2Initial.exact, description=parameter_description(p))
             self._params.append((vr, p, table))
