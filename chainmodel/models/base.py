@@ -21,6 +21,9 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from ..geometry import Drive
+from . import limits
+
+_ANGLE_LIMIT = limits.ANGLE_LIMIT
 
 __all__ = ["Inputs", "OutputSpec", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "ALL_OUTPUTS", "Model",
            "SimulationDiverged", "quasi_static_extras", "QUASI_STATIC", "centrifugal_tension"]
@@ -255,7 +258,6 @@ class Model(ABC):
         """(largest |input_shaft.speed| [rad/s] this level is valid to, the reason in words).
         Default, every level: the speed at which the centrifugal tension rho A v^2 alone
         strains the chain by limits.STRAIN_LIMIT."""
-        from . import limits
         w = limits.centrifugal_speed_limit(self.drive, self.params)
         return w, (f"the centrifugal tension rho A v^2 would strain the chain by more than "
                    f"{100 * limits.STRAIN_LIMIT:g} %")
@@ -263,7 +265,6 @@ class Model(ABC):
     def torque_limit(self) -> float:
         """Largest |load.torque| [N.m]: the tight span would carry torque / R_driven, at most
         limits.tension_limit (small strain)."""
-        from . import limits
         return limits.tension_limit(self.drive, self.params) * self.drive.driven.pitch_radius
 
     def input_error(self, angle: float, speed: float, torque: float) -> str | None:
@@ -271,10 +272,9 @@ class Model(ABC):
         what is valid: finite values, |input_shaft.angle| <= limits.ANGLE_LIMIT,
         |input_shaft.speed| <= :meth:`speed_limit`, |load.torque| <= :meth:`torque_limit`.
         The steppers and the FMU call it before every step."""
-        from . import limits
         bounds = self.__dict__.get("_input_bounds")
         try:
-            ok = (bounds is not None and abs(angle) <= limits.ANGLE_LIMIT
+            ok = (bounds is not None and abs(angle) <= _ANGLE_LIMIT
                   and abs(speed) <= bounds[0] and abs(torque) <= bounds[2])
         except TypeError:
             ok = False
