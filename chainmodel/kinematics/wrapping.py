@@ -218,16 +218,35 @@ def wrap_length(drive: Drive, theta4=None, *, driver_angle=None) -> np.ndarray:
     return chain_geometry(drive, phi1, phi2).wrap_length
 
 
+_INV_PHI = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+def _golden_min(f, lo: float, hi: float, xatol: float) -> tuple[float, float]:
+    """(f(x*), x*) of a unimodal f on [lo, hi] by golden-section search to ``xatol``. Here
+    rather than scipy.optimize.minimize_scalar: importing scipy.optimize costs ~0.7 s, which
+    every process (and every FMU instantiation) paid for this one bracket."""
+    c, d = hi - _INV_PHI * (hi - lo), lo + _INV_PHI * (hi - lo)
+    fc, fd = f(c), f(d)
+    while hi - lo > xatol:
+        if fc < fd:
+            hi, d, fd = d, c, fc
+            c = hi - _INV_PHI * (hi - lo)
+            fc = f(c)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + _INV_PHI * (hi - lo)
+            fd = f(d)
+    return (fc, c) if fc < fd else (fd, d)
+
+
 def _min_over_period(fun, period: float, samples: int = 200) -> tuple[float, float]:
     """Minimum of a tooth-periodic function: dense samples, then golden-section refinement."""
-    from scipy.optimize import minimize_scalar
     x = np.arange(samples) * (period / samples)
     y = fun(x)
     i = int(np.argmin(y))
     lo, hi = x[i] - period / samples, x[i] + period / samples
-    res = minimize_scalar(lambda v: float(fun(np.array([v]))[0]), bounds=(lo, hi),
-                          method="bounded", options={"xatol": period * 1e-9})
-    return (float(res.fun), float(res.x)) if res.fun < y[i] else (float(y[i]), float(x[i]))
+    fmin, xmin = _golden_min(lambda v: float(fun(np.array([v]))[0]), lo, hi, period * 1e-9)
+    return (fmin, xmin) if fmin < y[i] else (float(y[i]), float(x[i]))
 
 
 def wrap_length_range(drive: Drive, samples: int = 200) -> tuple[float, float, float]:
