@@ -451,7 +451,9 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
         ("dominant freq.", f"{_g(s['dominant_frequency_hz'])} Hz of the driven speed  (meshing "
                            f"{_g(s['meshing_frequency_hz'])} Hz, resolution "
                            f"{_g(s['frequency_resolution_hz'], 3)} Hz)"),
-        ("wall time", f"{s['wall_time_s']:.3g} s  (real-time factor {_g(rtf, 3)})"),
+        ("wall time", f"{s['wall_time_s']:.3g} s  (real-time factor {_g(rtf, 3)}"
+                      + (f"; {s['startup_time_s']:.2g} s of it instantiating and initializing "
+                         "the FMU)" if s.get("startup_time_s") is not None else ")")),
     ]
     for k, note in enumerate(s["notes"]):
         rows.append(("notes" if k == 0 else "", note))

@@ -111,7 +111,8 @@ def simulate_fmu(fmu_path: str | Path, scene: Any = "xu2010", *, log: Callable[[
     :class:`~chainmodel.models.base.SimulationDiverged` (a step was discarded), or
     :class:`FMUError`.
 
-    ``result.stats`` has ``communication_steps``, ``wall_time`` and ``fmu`` (the path);
+    ``result.stats`` has ``communication_steps``, ``wall_time``, ``startup_time`` (the part of
+    it before the first step: instantiation or reset, parameters, initialization) and ``fmu``;
     ``result.descriptions`` are the chosen level's output descriptions. Many runs of one FMU
     (a sweep) reuse one instance with :class:`FMUSession`.
     """
@@ -227,6 +228,7 @@ class FMUSession:
             except FMICallException:
                 raise ValueError(logger.problems(mark)) from None
             data[0] = fmu.getReal(out_vr)
+            startup = _time.perf_counter() - wall
             i = _step_loop(fmu, in_vr, out_vr, times, u, data, bar)
             if i < len(times):
                 raise SimulationDiverged(f"FMU step to t = {times[i]:.6g} s failed: "
@@ -244,7 +246,8 @@ class FMUSession:
             descriptions = {n: by_name[n].description or "" for n in outputs}
             static = math.nan
         series = {name: data[:, k].copy() for k, name in enumerate(outputs)}
-        stats = {"communication_steps": len(times) - 1, "wall_time": wall, "fmu": str(self.path)}
+        stats = {"communication_steps": len(times) - 1, "wall_time": wall, "fmu": str(self.path),
+                 "startup_time": startup}
         return Result(sc, times, series, descriptions, wall, stats, static)
 
 

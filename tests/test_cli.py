@@ -544,6 +544,8 @@ def test_run_via_fmu_matches_the_library(capsys, request):
     data = run_json(capsys, *argv, "--via-fmu", fmu)
     lib = run_json(capsys, *argv)
     assert data["via_fmu"] is True and lib["via_fmu"] is False
+    # the FMU's start-up is a part of its wall time; the library has none to report
+    assert 0 < data["startup_time_s"] < data["wall_time_s"] and lib["startup_time_s"] is None
     assert data["tooth_ratio"] == pytest.approx(25 / 17, abs=1e-9)
     assert data["meshing_frequency_hz"] == pytest.approx(50.0, rel=1e-9)
     # same scene, same level-0 physics; the FMU's inputs differ only during the ramp

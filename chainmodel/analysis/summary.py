@@ -115,6 +115,10 @@ def summarise(result) -> dict:
         "meshing_frequency_hz": mesh,
         "wall_time_s": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else math.inf,
+        # through the FMU: the part of the wall time before the first step (instantiation with
+        # its embedded import and cached-kernel load, parameters, initialization)
+        "startup_time_s": (float(result.stats["startup_time"])
+                           if "startup_time" in (result.stats or {}) else None),
         "warnings": warnings,
     }
     return out
