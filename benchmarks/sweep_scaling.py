@@ -28,11 +28,15 @@ def main() -> None:
     ap.add_argument("study", nargs="?", default=str(ROOT / "examples/studies/speed_pretension.toml"))
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--set", action="append", default=[], dest="settings")
+    ap.add_argument("--chunk-size", type=int, default=None,
+                    help="cases per chunk on the workers (default: the sweep's, 8 chunks per worker)")
     args = ap.parse_args()
     from chainmodel.analysis.sweep import sweep
     from chainmodel.cli import _parse_settings
     fixed = _parse_settings(args.settings)
-    modes = {"serial": dict(serial=True), "1 worker": dict(workers=1), "2 workers": dict(workers=2)}
+    chunking = {} if args.chunk_size is None else {"chunk_size": args.chunk_size}
+    modes = {"serial": dict(serial=True), "1 worker": dict(workers=1, **chunking),
+             "2 workers": dict(workers=2, **chunking)}
     runs: dict[str, list] = {m: [] for m in modes}
     print(f"load before: {os.getloadavg()}")
     with tempfile.TemporaryDirectory() as tmp:
