@@ -4,7 +4,7 @@
     python benchmarks/fmu_cost.py --write-doc      # ... and rewrite "## FMU" in docs/performance.md
 
 Both FMUs are driven by the same master loop through fmpy's low-level API, interleaved block by
-block in the same run: per step set the three inputs, fmi2DoStep, get the fourteen outputs. The
+block in the same run: per step set the three inputs, fmi2DoStep, get the fifteen outputs. The
 bare FMU (benchmarks/bare_fmu/BareFmu.py, same inputs and outputs, does nothing) is the floor
 every pythonfmu FMU pays. For every fidelity level the table gives the ChainDrive FMU, the
 floor, their ratio, and the library's own cost per output point (``simulate()`` of the same
@@ -227,9 +227,9 @@ def section(res: dict) -> str:
     return f"""## FMU
 
 Cost per communication step of `ChainDrive.fmu` through fmpy's low-level API, next to a bare
-pythonfmu FMU with the same 3 inputs and 14 outputs that does nothing
+pythonfmu FMU with the same 3 inputs and 15 outputs that does nothing
 (`benchmarks/bare_fmu/BareFmu.py`), measured interleaved block by block in the same run. Master
-loop per step: set the 3 inputs, `fmi2DoStep`, get the 14 outputs. Scene: xu2010 (seed 003
+loop per step: set the 3 inputs, `fmi2DoStep`, get the 15 outputs. Scene: xu2010 (seed 003
 drive, ramp to 120 rpm, 43.2 N.m), h = {res['h']:g} s, median of {res['repeats']} blocks of
 {res['steps']} steps from t = 0. "library": the whole `simulate()` call on the same grid divided
 by its output points; "adapter": `fmu_src/ChainDrive.py` called in-process without FMI (best
@@ -240,13 +240,13 @@ block of 500 steps).
 {chr(10).join(rows)}
 
 One `fmi2DoStep` is one compiled call at every level (the step, its stable-step guard and the
-14 outputs into a buffer; `Stepper.advance_held`); the adapter copies the values. The rest of
+15 outputs into a buffer; `Stepper.advance_held`); the adapter copies the values. The rest of
 the FMU's cost is pythonfmu's own per-call path (the floor: ctypes, the C++ wrapper, the GIL,
 Python-side get/set), paid three times a step by this master.
 
 Command: `{COMMAND}`; machine: {machine()}; fmpy {fmpy.__version__}, pythonfmu
-{pythonfmu.__version__}; load average {load} (2 cores shared with other jobs: the interleaving
-keeps the ratios fair, the absolute figures are indicative); date
+{pythonfmu.__version__}; load average {load} (when other jobs share the 2 cores the interleaving
+keeps the ratios fair; the absolute figures are indicative); date
 {datetime.date.today().isoformat()}.
 """
 
