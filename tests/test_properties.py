@@ -171,20 +171,27 @@ def dynamic_cases(draw):
                 chain_link_damping=draw(st.sampled_from([0.0, 100.0])))
 
 
+def _short_run(case, level, duration, ramp_time):
+    """The scene of a dynamic case at ``level`` and its run, at a fraction of the level's speed
+    limit (at most 400 rpm), every output checked finite."""
+    case = dict(case)
+    frac = case.pop("speed_fraction")
+    sc = chainmodel.load_scene("xu2010", fidelity=level, **case)
+    w_max = sc.model().speed_limit()[0]
+    rpm = frac * min(w_max, 400 * 2 * math.pi / 60) * 60 / (2 * math.pi)
+    r = chainmodel.simulate(sc, input_speed_rpm=rpm, duration=duration, output_interval=2e-4,
+                            ramp_time=ramp_time)
+    for name in r.names:
+        assert np.all(np.isfinite(r[name])), name
+    return sc, r
+
+
 @pytest.mark.parametrize("level", [1, 2])
 def test_short_runs_are_finite_and_never_push(level):
     @settings(max_examples=12, **SETTINGS)
     @given(case=dynamic_cases())
     def check(case):
-        case = dict(case)
-        frac = case.pop("speed_fraction")
-        sc = chainmodel.load_scene("xu2010", fidelity=level, **case)
-        w_max = sc.model().speed_limit()[0]
-        rpm = frac * min(w_max, 400 * 2 * math.pi / 60) * 60 / (2 * math.pi)
-        r = chainmodel.simulate(sc, input_speed_rpm=rpm, duration=0.05, output_interval=2e-4,
-                                ramp_time=0.02)
-        for name in r.names:
-            assert np.all(np.isfinite(r[name])), name
+        sc, r = _short_run(case, level, 0.05, 0.02)
         v = sc.drive.n_driver * sc.drive.pitch * r["driver.speed"] / (2 * math.pi)
         c = sc.parameters["chain.link_mass"] / sc.drive.pitch * v * v
         assert np.all(r["slack_span.tension"] >= c * (1 - 1e-12) - 1e-9)
@@ -203,15 +210,7 @@ def test_level3_short_runs_are_finite_and_never_push():
     @settings(max_examples=6, **SETTINGS)
     @given(case=dynamic_cases())
     def check(case):
-        case = dict(case)
-        frac = case.pop("speed_fraction")
-        sc = chainmodel.load_scene("xu2010", fidelity=3, **case)
-        w_max = sc.model().speed_limit()[0]
-        rpm = frac * min(w_max, 400 * 2 * math.pi / 60) * 60 / (2 * math.pi)
-        r = chainmodel.simulate(sc, input_speed_rpm=rpm, duration=0.03, output_interval=2e-4,
-                                ramp_time=0.01)
-        for name in r.names:
-            assert np.all(np.isfinite(r[name])), name
+        _, r = _short_run(case, 3, 0.03, 0.01)
         for name in ("tight_span.tension", "slack_span.tension", "chain.min_link_tension"):
             assert np.all(r[name] >= -1e-9 * np.max(np.abs(r[name]))), name
 
