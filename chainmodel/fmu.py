@@ -258,9 +258,7 @@ def _step_loop(fmu, in_vr, out_vr, times, u, data, bar) -> int:
     and check the status in Python on every call: about a third of a step's cost at 0.1 ms).
     Returns ``len(times)``, or the index of the point whose step or set failed (status above
     fmi2Warning; the FMU logged why)."""
-    import ctypes
-
-    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+    from fmpy.fmi2 import fmi2Real, fmi2ValueReference, fmi2Warning
     n_in, n_out = len(in_vr), len(out_vr)
     comp, dll = fmu.component, fmu.dll
     do_step, set_real, get_real = dll.fmi2DoStep, dll.fmi2SetReal, dll.fmi2GetReal
@@ -269,18 +267,17 @@ def _step_loop(fmu, in_vr, out_vr, times, u, data, bar) -> int:
     buf_in, buf_out = (fmi2Real * n_in)(), (fmi2Real * n_out)()
     view_in = np.ctypeslib.as_array(buf_in)
     view_out = np.ctypeslib.as_array(buf_out)
-    warning = 1   # fmi2Warning: a step that returns more than this failed
-    for i in range(1, len(times)):
-        if do_step(comp, ctypes.c_double(times[i - 1]), ctypes.c_double(times[i] - times[i - 1]),
-                   1) > warning:
+    t = times.tolist()     # Python floats: fmpy's declared argtypes convert them directly
+    for i in range(1, len(t)):
+        if do_step(comp, t[i - 1], t[i] - t[i - 1], 1) > fmi2Warning:
             return i
         view_in[:] = u[i]
-        if set_real(comp, vr_in, n_in, buf_in) > warning:
+        if set_real(comp, vr_in, n_in, buf_in) > fmi2Warning:
             return i
-        if get_real(comp, vr_out, n_out, buf_out) > warning:
+        if get_real(comp, vr_out, n_out, buf_out) > fmi2Warning:
             return i
         data[i] = view_out
-        bar.update(times[i])
+        bar.update(t[i])
     return len(times)
 
 

@@ -100,11 +100,6 @@ class Profile:
         torque = tq[np.clip(np.searchsorted(tt, t, side="right") - 1, 0, len(tt) - 1)]
         return angle, w, acc, torque
 
-    def __call__(self, t: float):
-        from ..models import Inputs
-        a, w, acc, tq = (float(v[0]) for v in self.arrays([t]))
-        return Inputs(a, w, tq, acc)
-
 
 @dataclass(frozen=True)
 class ScenarioSpec:
@@ -197,6 +192,14 @@ def _readme(title: str, purpose: str, level: int, meaningful: Sequence[str],
               "in time (docs/fmu.md, \"Regression testing your FMU\").\n")
 
 
+def non_default_parameters(params: Mapping) -> dict:
+    """The parameters of ``params`` whose values differ from the schema's defaults: what a
+    reference sets as start values (the FMU starts from the defaults)."""
+    from .. import parameters as P
+    defaults = P.validate({})
+    return {k: v for k, v in params.items() if defaults.get(k) != v}
+
+
 def held_acceleration(times, speed) -> np.ndarray:
     """The acceleration a co-simulation FMU of ChainDrive uses over the step from times[k]:
     backward difference of the speed samples (0 at the first point; docs/fmu.md)."""
@@ -233,12 +236,10 @@ def make_references(root: str | Path, levels: Sequence[int] = (0, 1, 2, 3),
                     scenarios: Sequence[ScenarioSpec] = SCENARIOS) -> list[Path]:
     """Write the committed reference set under ``root`` from the LIBRARY: the xu2010 scene at
     each level, the profile sampled on the grid and run by :func:`library_run`."""
-    from .. import parameters as P
     from ..models.base import QUASI_STATIC
     from ..scene import Scene
 
     root = Path(root)
-    defaults = P.validate({})
     written = []
     for spec in scenarios:
         for level in spec.levels:
@@ -251,7 +252,7 @@ def make_references(root: str | Path, levels: Sequence[int] = (0, 1, 2, 3),
             descriptions = model.output_descriptions()
             estimates = [n for n in OUTPUT_NAMES if descriptions.get(n, "").startswith(QUASI_STATIC)]
             meaningful = [n for n in OUTPUT_NAMES if n not in estimates]
-            start = {k: v for k, v in sc.parameters.items() if defaults.get(k) != v}
+            start = non_default_parameters(sc.parameters)
             name = f"L{level}_{spec.name}"
             written.append(write_reference(
                 root / name, time=times,
@@ -462,14 +463,12 @@ def scene_reference(scene, out: str | Path, fmu: str | Path, host: str = "fmpy")
     """Record a user's scene (TOML path, preset or Scene) through the FMU as one reference
     folder: the scene's inputs on its grid, every parameter that differs from the FMU's
     defaults as a start value, RelTol the accuracy of the scene's level."""
-    from .. import parameters as P
     from ..fmu_hosts import run_fmu
     from ..scene import load_scene
     sc = load_scene(scene)
     times = sc.times()
     angle, speed, acc, torque = sc.input_arrays(times)
-    defaults = P.validate({})
-    start = {k: v for k, v in sc.parameters.items() if defaults.get(k) != v}
+    start = non_default_parameters(sc.parameters)
     step = float(times[1] - times[0])
     run = run_fmu(fmu, host, stop_time=float(times[-1]), step_size=step,
                   inputs=dict(zip(INPUT_NAMES, (angle, speed, torque))), start_values=start)
@@ -569,7 +568,7 @@ def cmd_fmu_test(args) -> int:
                 return 0
             root = Path(args.references) if args.references else \
                 _shipped_references(fmu, Path(tmp))
-            refs = [r for r in read_references(root, outputs)]
+            refs = read_references(root, outputs)
             for r in refs:
                 bad = [n for n in r.inputs if n not in inputs]
                 if bad:
