@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import io
 import json
 import html
 import math
@@ -458,18 +457,6 @@ def write_reference(fmu: Path, path: Path = REFERENCE_CSV) -> Path:
     return path
 
 
-def _literal(text: str):
-    """A --default value: true/false, an int, a float, else the text."""
-    if text.lower() in ("true", "false"):
-        return text.lower() == "true"
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT, help="FMU file to write")
@@ -484,13 +471,14 @@ def main(argv=None) -> int:
                          "the build, comma-separated (default 0,1,2; 'none' skips)")
     ap.add_argument("-q", "--quiet", action="store_true")
     args = ap.parse_args(argv)
+    from chainmodel.parameters import parse_text
     levels = parse_levels(ap, args.warm)
     defaults = {}
     for item in args.default:
         name, sep, value = item.partition("=")
         if not sep:
             ap.error(f"--default {item!r}: write NAME=VALUE")
-        defaults[name.strip()] = _literal(value.strip())
+        defaults[name.strip()] = parse_text(value)
     try:
         fmu = build(args.out, quiet=args.quiet, defaults=defaults)
     except ValueError as exc:

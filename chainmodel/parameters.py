@@ -18,7 +18,7 @@ from typing import Any, Mapping
 
 __all__ = ["Parameter", "PARAMETERS", "BY_NAME", "defaults", "validate", "FIDELITY_NAMES",
            "fidelity_level", "markdown_table", "canonical_name", "close_matches",
-           "unknown_name_message", "BY_UNDERSCORE"]
+           "unknown_name_message", "BY_UNDERSCORE", "parse_text"]
 
 FIDELITY_NAMES = ("kinematic", "torsional", "modal", "multibody")
 
@@ -350,3 +350,18 @@ def markdown_table() -> str:
 
 if __name__ == "__main__":  # pragma: no cover
     print(markdown_table(), end="")
+
+
+def parse_text(text: str) -> Any:
+    """A value written as text (a NAME=VALUE option, a reference's start values): true/false
+    (any case) as a bool, else an int, else a float, else the text itself; :func:`validate`
+    then checks it against the schema."""
+    t = text.strip()
+    if t.lower() in ("true", "false"):
+        return t.lower() == "true"
+    for kind in (int, float):
+        try:
+            return kind(t)
+        except ValueError:
+            pass
+    return t

@@ -268,25 +268,13 @@ def make_references(root: str | Path, levels: Sequence[int] = (0, 1, 2, 3),
     return written
 
 
-def _parse_value(text: str):
-    t = text.strip()
-    if t in ("true", "false"):
-        return t == "true"
-    try:
-        return int(t)
-    except ValueError:
-        pass
-    try:
-        return float(t)
-    except ValueError:
-        return t
-
-
 def read_reference(folder: str | Path, outputs: Sequence[str] | None = None,
                    inputs: Sequence[str] = INPUT_NAMES) -> Reference:
     """Read one scenario folder; ReferenceError (naming the file) when it is malformed.
     ``outputs``/``inputs``: the FMU's output/input names every column must belong to."""
     from fmpy.util import read_csv, read_ref_opt_file
+
+    from ..parameters import parse_text
     folder = Path(folder)
     outputs = list(OUTPUT_NAMES if outputs is None else outputs)
     if not folder.is_dir():
@@ -340,7 +328,7 @@ def read_reference(folder: str | Path, outputs: Sequence[str] | None = None,
             parts = line.split(",")
             if len(parts) != 2:
                 raise ReferenceError(f"{folder / 'start.csv'}: line {k} is not 'name,value'")
-            start[parts[0].strip()] = _parse_value(parts[1])
+            start[parts[0].strip()] = parse_text(parts[1])
     return Reference(folder, opts, ins, time, ref, start)
 
 
