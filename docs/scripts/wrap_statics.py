@@ -18,11 +18,14 @@ import math
 import numpy as np
 from scipy.optimize import brentq, minimize
 
-K_LINK = 51e6          # chain.link_stiffness [N/m] (xu2010)
-K_C = 8.46e6           # contact.stiffness [N/m]
-D_R = 0.0051308 - 0.00508   # contact.seat_radius - chain.roller_radius [m]
-PITCH = 0.015875
-GAP = 5e-5             # chain.joint_clearance [m]
+from chainmodel.parameters import validate
+
+_P = validate({})      # the schema's defaults: seed 003's xu2010 chain, as level 3 uses them
+K_LINK = _P["chain.link_stiffness"]                          # [N/m]
+K_C = _P["contact.stiffness"]                                # [N/m]
+D_R = _P["contact.seat_radius"] - _P["chain.roller_radius"]  # radial seat clearance [m]
+PITCH = _P["drive.pitch"]
+GAP = _P["chain.joint_clearance"]                            # [m]
 EXCESS = 0.0005939077869307698   # L - M p, tooth-period mean [m] (xu2010, 46 links)
 SPAN_LINKS = 24.77
 
