@@ -232,10 +232,28 @@ def pitch_mismatch(name: str, pitch: float) -> str | None:
             f"{c.size.pitch * 1e3:g} mm); set drive.pitch to {c.size.pitch * 1e3:g} mm or {fix}")
 
 
-if __name__ == "__main__":  # pragma: no cover - the table of docs/scenes.md
+def _main(argv=None) -> int:
+    """``python -m chainmodel.chains``: the table of every chain's values (docs/scenes.md);
+    ``python -m chainmodel.chains 16B``: that chain's values as ``build_fmu.py --default``
+    arguments (an FMU whose start values are the chain's)."""
+    import sys
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args:
+        try:
+            values = parameter_values(args[0])
+        except ValueError as exc:
+            sys.stderr.write(f"chainmodel: error: {exc}\n")
+            return 2
+        print(" ".join(f"--default {k}={v!r}" for k, v in values.items()))
+        return 0
     names = chain_names()
-    rows = [("parameter", *names)]
+    print("| parameter | " + " | ".join(names) + " |")
+    print("|---" * (len(names) + 1) + "|")
     for key in ("drive.pitch",) + CHAIN_PARAMETERS:
-        rows.append((key, *(f"{parameter_values(n)[key]:.4g}" for n in names)))
-    for row in rows:
-        print("| " + " | ".join(row) + " |")
+        print(f"| `{key}` | " + " | ".join(f"{parameter_values(n)[key]:.4g}" for n in names)
+              + " |")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(_main())
