@@ -223,6 +223,19 @@ def test_schema_refuses_10b_values_on_another_pitch():
         P.validate({"drive.pitch": 0.0254})
     ok = P.validate({k: v for k, v in C.parameter_values("16B").items()})
     assert ok["chain.breaking_load"] == 60e3
+    # one value given on purpose (a study varying it) is a choice, not a forgotten chain
+    assert P.validate({"drive.pitch": 0.0254, "contact.stiffness": 1e7})["chain.link_mass"] == 0.0162
+
+
+def test_chains_module_prints_the_table_and_fmu_defaults(capsys):
+    assert C._main([]) == 0
+    out = capsys.readouterr().out
+    assert out.count("\n") == 2 + 1 + len(C.CHAIN_PARAMETERS) and "| `contact.stiffness` |" in out
+    assert C._main(["16B"]) == 0
+    args = capsys.readouterr().out.split()
+    assert "--default" in args and "chain.breaking_load=60000.0" in args
+    assert C._main(["20B"]) == 2
+    assert capsys.readouterr().err.startswith("chainmodel: error: unknown chain '20B'")
 
 
 def test_breaking_load_is_a_schema_parameter():
