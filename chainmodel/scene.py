@@ -323,6 +323,7 @@ class Scene:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"chain must be a chain name ({', '.join(C.chain_names())}), "
                              f"got {name!r}")
+        self._chain_named = bool(name)
         if not name:
             name = None
             missing = [n for n in C.CHAIN_PARAMETERS if n not in origins]
@@ -455,7 +456,8 @@ class Scene:
         for key, value in (parameters or {}).items():
             params[P.canonical_name(key) or key] = value    # unknown names: validate() refuses
             origins[P.canonical_name(key) or key] = "given"
-        chain = kw.pop("chain", None) or self.chain
+        # an assumed chain (none named) follows the pitch; a named one stays and is checked
+        chain = kw.pop("chain", None) or (self.chain if self._chain_named else None)
         op = self.operating
         duration, interval = self.duration, self.output_interval
         static = kw.pop("static_tension", None)

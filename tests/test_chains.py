@@ -188,6 +188,16 @@ def test_no_chain_named_takes_the_b_chain_of_the_pitch_and_says_so(tmp_path):
     assert "drive.pitch" not in assumed and "drive.links" not in assumed     # given
 
 
+def test_an_assumed_chain_follows_the_pitch_a_named_one_is_checked(tmp_path):
+    sc = Scene.from_toml(_toml(tmp_path, DRIVE_127))            # 08B assumed
+    moved = sc.with_overrides(drive_pitch=0.01905)
+    assert moved.chain == "12B" and any("12B assumed" in n for n in moved.notes)
+    assert not any("08B assumed" in n for n in moved.notes)
+    named = Scene.from_toml(_toml(tmp_path, 'chain = "08B"\n' + DRIVE_127, "named.toml"))
+    with pytest.raises(ValueError, match=r"19.05 mm\) does not match chain 08B"):
+        named.with_overrides(drive_pitch=0.01905)
+
+
 def test_explicit_values_win_over_the_chain(tmp_path):
     sc = Scene.from_toml(_toml(tmp_path, 'chain = "08A"\n' + DRIVE_127
                                + '"contact.stiffness" = 3e7\n'))
