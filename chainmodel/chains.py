@@ -26,7 +26,7 @@ Sources, per value (docs/scenes.md "Chains" has the table and the numbers):
   pp. 99-104: approach of the axes of two cylinders in line contact), carried from seed 003's
   10B value (8.46 kN/mm, its eq 16: pin-bush, bush-roller and roller-tooth contacts in series)
   by the ratio of that law between the chain and 10B. The Hertz law alone gives 10B about
-  0.79 MN/mm, ~90x seed 003's equivalent stiffness (see :data:`HERTZ_10B_RATIO` in the tests
+  784 kN/mm, 93x seed 003's equivalent stiffness (tests/test_chains.py checks the ratio
   and docs/scenes.md): as for the link, the law gives the size dependence, the paper the level;
 * ``contact.damping``: 10 % of critical for one link mass on the contact spring,
   0.1 x 2 sqrt(k_c m) (the schema default's rule for 10B);
