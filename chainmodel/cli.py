@@ -82,6 +82,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     ("chainmodel.analysis.tradeoff", "register"),
     ("chainmodel.analysis.sweep.cli", "register"),
     ("chainmodel.cache", "register"),
+    ("chainmodel.new_scene", "register"),
     ("chainmodel.analysis.fmu_test", "register"),
 ]
 
@@ -401,6 +402,7 @@ def cmd_run(args) -> int:
                 "fidelity_level": int(result.fidelity), "via_fmu": fmu_arg is not None,
                 "samples": len(result.time), "output_interval_s": scene.output_interval,
                 "drive": drive_dict(scene.drive), "notes": list(scene.notes)})
+    out["assumed"] = scene.assumed_lines()    # values not given, with their sources
     if choice is not None:
         out["fidelity_auto"] = {"config": choice.config, "expected_error": choice.expected_error,
                                 "figures": list(choice.figures), "met": choice.met,
@@ -457,6 +459,8 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
     ]
     for k, note in enumerate(s["notes"]):
         rows.append(("notes" if k == 0 else "", note))
+    for k, text in enumerate(s.get("assumed", ())):
+        rows.append(("assumed" if k == 0 else "", text))
     for k, text in enumerate(s.get("warnings", ())):
         rows.append(("WARNING" if k == 0 else "", text))
     return _table(rows)

@@ -6,6 +6,8 @@ is given in rpm because that is how drives are specified)::
 
     name = "my drive"
     preset = "xu2010"            # optional: start from a preset's drive and values
+    chain = "16B"                # optional: the ISO 606 chain (chainmodel.chains) sets every
+                                 # chain value not given below; its pitch must be drive.pitch
     fidelity = "multibody"       # or 0-3
     duration = 1.0               # s
     output_interval = 1e-4       # s, communication step
@@ -18,6 +20,9 @@ is given in rpm because that is how drives are specified)::
     "chain.link_damping" = 100   # any name of chainmodel.parameters
 
 Every value is validated where it enters; errors name the key and the valid range.
+A scene that names no chain on a pitch other than 15.875 mm (the 10B of the defaults) gets the
+B-series ISO 606 chain of its pitch, with a note; :meth:`Scene.assumed` lists every value the
+user did not give and where it comes from (docs/scenes.md).
 """
 
 from __future__ import annotations
@@ -44,7 +49,7 @@ RPM = 2 * math.pi / 60
 
 #: the scene settings :meth:`Scene.with_overrides` takes besides the parameters
 SETTINGS = ("fidelity", "duration", "output_interval", "input_speed_rpm", "input_speed",
-            "ramp_time", "load_torque", "static_tension")
+            "ramp_time", "load_torque", "static_tension", "chain")
 
 
 def setting_names() -> list[str]:
@@ -121,12 +126,26 @@ def _table2_values(drive: Drive) -> dict[str, Any]:
             "torsional.seat_compliance": False}
 
 
+def _xu2010_chain_values() -> dict[str, Any]:
+    """xu2010's chain: ISO 606 10B with seed 003 section 7's values - the schema defaults."""
+    from .chains import CHAIN_PARAMETERS
+    return {n: P.BY_NAME[n].default for n in CHAIN_PARAMETERS}
+
+
 def _preset_scene(name: str) -> dict[str, Any]:
     if name == "xu2010":
         v = reference_values("multibody_example_xu2010.csv")
-        return dict(name="xu2010", parameters={}, duration=1.0, output_interval=1e-4,
+        params = _xu2010_chain_values()
+        params.update({"drive.driver_teeth": int(v["z1"]), "drive.driven_teeth": int(v["z2"]),
+                       "drive.pitch": v["pitch"], "drive.links": int(v["links"]),
+                       "drive.centre_distance": v["center_distance"]})
+        return dict(name="xu2010", parameters=params, duration=1.0, output_interval=1e-4,
                     operating=OperatingPoint(v["input_speed"] * RPM, v["ramp_time"], v["M_load"]),
-                    notes=["seed 003 section 7; centre distance 197.7 mm as in the paper"])
+                    notes=["seed 003 section 7; centre distance 197.7 mm as in the paper"],
+                    chain="10B", origins={k: ("preset xu2010: seed 003 section 7"
+                                              if k.startswith("drive.") else
+                                              "preset xu2010: 10B as in seed 003 section 7")
+                                          for k in params})
     drive = preset(name)
     params = {"drive.driver_teeth": drive.n_driver, "drive.driven_teeth": drive.n_driven,
               "drive.pitch": drive.pitch, "drive.centre_distance": drive.centre_distance}
@@ -140,8 +159,13 @@ def _preset_scene(name: str) -> dict[str, Any]:
     else:
         params["drive.links"] = drive.links
     static = None
+    origins = {k: f"preset {name}: seed 004 Table 1 / seed 000 Table 1" for k in params}
+    chain = None
     if abs(drive.pitch - INCH) < 1e-12:
-        params.update(_table2_values(drive))
+        table2 = _table2_values(drive)
+        params.update(table2)
+        origins.update({k: f"preset {name}: seed 004 Table 2" for k in table2})
+        chain = "16B"      # the B-series ISO 606 chain of 25.4 mm (16B's d1 is Table 2's roller)
         t2 = reference_values("dynamic_params_jsv2016_table2.csv")
         static = t2["P_tot"] / 2
         load = drive.driven.pitch_radius * t2["f1"]
@@ -151,7 +175,7 @@ def _preset_scene(name: str) -> dict[str, Any]:
     else:
         op = OperatingPoint()
     return dict(name=name, parameters=params, duration=1.0, output_interval=1e-4, operating=op,
-                static_tension=static, notes=notes)
+                static_tension=static, notes=notes, chain=chain, origins=origins)
 
 
 def scene_names() -> list[str]:
@@ -240,6 +264,7 @@ def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) ->
 
 
 _STATIC_NOTE = "for a static span tension of"
+_CHAIN_NOTE = "no chain named: ISO 606"
 
 
 @dataclass
@@ -257,8 +282,14 @@ class Scene:
     output_interval: float = 1e-4
     notes: list[str] = field(default_factory=list)
     static_tension: float | None = None
+    #: the ISO 606 chain (chainmodel.chains) whose values fill the chain parameters not given
+    chain: str | None = None
+    #: where each given parameter comes from ("given" for the file and overrides, "preset ...");
+    #: None: every entry of ``parameters`` counts as given
+    origins: dict[str, str] | None = None
 
     def __post_init__(self):
+        self._apply_chain()
         self.parameters = P.validate(self.parameters)
         check_positive("duration", self.duration)
         check_positive("output_interval", self.output_interval)
@@ -277,6 +308,94 @@ class Scene:
                 f"chain.pretension = {pre:.6g} N {_STATIC_NOTE} {target:g} N at fidelity "
                 f"{level}"]
 
+    def _apply_chain(self) -> None:
+        """Fill the chain values not given from the named chain (or, with none named on a pitch
+        other than the defaults' 10B, from the B-series chain of the pitch); refuse a chain
+        whose pitch is not drive.pitch, and a pitch no chain has unless every chain value is
+        given. Records the filled values' sources for :meth:`assumed`."""
+        from . import chains as C
+        params = dict(self.parameters)
+        origins = (dict(self.origins) if self.origins is not None
+                   else {P.canonical_name(k) or k: "given" for k in params})
+        pitch = params.get("drive.pitch", P.BY_NAME["drive.pitch"].default)
+        name = self.chain
+        self.notes = [n for n in self.notes if not n.startswith(_CHAIN_NOTE)]
+        if name is not None and not isinstance(name, str):
+            raise ValueError(f"chain must be a chain name ({', '.join(C.chain_names())}), "
+                             f"got {name!r}")
+        self._chain_named = bool(name)
+        if not name:
+            name = None
+            missing = [n for n in C.CHAIN_PARAMETERS if n not in origins]
+            if abs(pitch - P.BY_NAME["drive.pitch"].default) > 1e-9 and missing:
+                name = C.default_chain_for_pitch(pitch)
+                if name is None:
+                    raise ValueError(
+                        f"drive.pitch ({pitch * 1e3:g} mm) is the pitch of no ISO 606 chain "
+                        f"here ({', '.join(C.chain_names())}): name a chain, or give every "
+                        f"chain value; missing: {', '.join(missing)}")
+                self.notes.append(f"{_CHAIN_NOTE} {name} assumed from drive.pitch "
+                                  f"{pitch * 1e3:g} mm (B series; name chain = "
+                                  f"\"{C.chains_of_pitch(pitch)[-1]}\" for another)")
+        filled: dict[str, str] = {}
+        if name is not None:
+            name = C.chain(name).name
+            values, sources = C.parameter_values(name), C.parameter_sources(name)
+            if "drive.pitch" in origins:
+                why = C.pitch_mismatch(name, pitch)
+                if why is not None:
+                    raise ValueError(f"scene {self.name!r}: {why}")
+            for key, value in values.items():
+                if key not in origins:
+                    params[key] = value
+                    filled[key] = f"chain {name}: {sources[key]}"
+        self.chain, self.origins, self.parameters = name, origins, params
+        self._filled = filled
+
+    def value_sources(self) -> dict[str, str]:
+        """Where every parameter's value comes from: "given" (the scene file or overrides),
+        "preset NAME: ..." (a preset's cited values), "chain NAME: ..." (the chain's law,
+        chainmodel.chains), "static_tension ..." (solved), or "default: ..." (the schema's
+        default and its reason, docs/parameters.md)."""
+        out = {}
+        for p in P.PARAMETERS:
+            if p.name in self.origins:
+                out[p.name] = self.origins[p.name]
+            elif p.name in getattr(self, "_filled", {}):
+                out[p.name] = self._filled[p.name]
+            elif p.name == "chain.pretension" and self.static_tension is not None:
+                out[p.name] = f"static_tension: solved for {self.static_tension:g} N at rest"
+            else:
+                out[p.name] = "default: " + p.description
+        return out
+
+    def assumed(self, levels: tuple[int, ...] | None = None) -> dict[str, tuple[Any, str]]:
+        """Every parameter the user did not give (file or overrides): name -> (value, source),
+        :meth:`value_sources`; ``levels`` keeps only the parameters those fidelity levels use
+        (None: every parameter)."""
+        out = {}
+        for name, source in self.value_sources().items():
+            spec = P.BY_NAME[name]
+            if source == "given" or (levels is not None and not set(spec.levels) & set(levels)):
+                continue
+            out[name] = (self.parameters[name], source)
+        return out
+
+    def assumed_lines(self) -> list[str]:
+        """:meth:`assumed` at this scene's level as text lines, ``name = value unit  (source)``
+        with the source cut to its first clause (the CLI's ``assumed`` block)."""
+        lines = []
+        for name, (value, source) in self.assumed((self.fidelity,)).items():
+            if name == "fidelity" or name.startswith("solver."):   # numerics, not the drive
+                continue
+            unit = P.BY_NAME[name].unit
+            shown = f"{value:.6g}" if isinstance(value, float) else str(value).lower()
+            short = source.split(";")[0]
+            if len(short) > 80:
+                short = short[:77] + "..."
+            lines.append(f"{name} = {shown}{' ' + unit if unit else ''}  ({short})")
+        return lines
+
     # --- construction --------------------------------------------------------------------
     @classmethod
     def from_preset(cls, name: str, **overrides) -> "Scene":
@@ -285,7 +404,8 @@ class Scene:
                              f"{', '.join(preset_names())} or give a .toml file")
         spec = _preset_scene(name)
         scene = cls(spec["name"], dict(spec["parameters"]), spec["operating"], spec["duration"],
-                    spec["output_interval"], list(spec["notes"]))
+                    spec["output_interval"], list(spec["notes"]), chain=spec.get("chain"),
+                    origins=dict(spec.get("origins", {})))
         scene = scene.with_overrides(**overrides) if overrides else scene
         explicit = {"static_tension", "chain_pretension", "chain.pretension"} & set(overrides)
         if spec.get("static_tension") is not None and not explicit:
@@ -309,15 +429,15 @@ class Scene:
             raise ValueError(f"scene file {str(path)!r} does not exist") from None
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"scene file {str(path)!r} is not valid TOML: {exc}") from None
-        known = {"name", "preset", "fidelity", "duration", "output_interval", "operating",
-                 "parameters"}
+        known = {"name", "preset", "chain", "fidelity", "duration", "output_interval",
+                 "operating", "parameters"}
         unknown = set(data) - known
         if unknown:
             raise ValueError(f"scene file {path.name}: unknown keys {sorted(unknown)}; "
                              f"valid: {sorted(known)}")
         base = cls.from_preset(data["preset"]) if "preset" in data else cls("scene", {})
         kw: dict[str, Any] = dict(data.get("operating", {}))
-        for key in ("fidelity", "duration", "output_interval"):
+        for key in ("chain", "fidelity", "duration", "output_interval"):
             if key in data:
                 kw[key] = data[key]
         kw.update(overrides)
@@ -332,8 +452,12 @@ class Scene:
         ...}``) or with its dots written as underscores (``chain_link_mass=...``); the same two
         forms in ``parameters``. An unknown name raises ValueError listing the closest names."""
         params = dict(self.parameters)
+        origins = dict(self.origins) if self.origins is not None else {}
         for key, value in (parameters or {}).items():
             params[P.canonical_name(key) or key] = value    # unknown names: validate() refuses
+            origins[P.canonical_name(key) or key] = "given"
+        # an assumed chain (none named) follows the pitch; a named one stays and is checked
+        chain = kw.pop("chain", None) or (self.chain if self._chain_named else None)
         op = self.operating
         duration, interval = self.duration, self.output_interval
         static = kw.pop("static_tension", None)
@@ -351,6 +475,7 @@ class Scene:
                 continue
             if key == "fidelity":
                 params["fidelity"] = P.fidelity_level(value)
+                origins["fidelity"] = "given"
             elif key == "duration":
                 duration = value
             elif key == "output_interval":
@@ -365,6 +490,7 @@ class Scene:
                 op = replace(op, load_torque=_finite("load_torque", value))
             elif P.canonical_name(key) is not None:
                 params[P.canonical_name(key)] = value
+                origins[P.canonical_name(key)] = "given"
             else:
                 raise ValueError(P.unknown_name_message("scene setting or parameter", key,
                                                         setting_names())
@@ -374,7 +500,8 @@ class Scene:
         notes = list(self.notes)
         if static is None:
             notes = [n for n in notes if _STATIC_NOTE not in n]
-        return Scene(self.name, params, op, duration, interval, notes, static)
+        return Scene(self.name, params, op, duration, interval, notes, static, chain=chain,
+                     origins=origins)
 
     def with_static_tension(self, tension: float) -> "Scene":
         """A copy whose chain.pretension gives the static span tension ``tension`` [N] at rest
