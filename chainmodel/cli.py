@@ -369,6 +369,9 @@ def cmd_run(args) -> int:
         choice = choose(scene, args.outputs, args.accuracy)
         scene = scene.with_overrides(**choice.overrides)
         sys.stderr.write(f"chainmodel: {choice.message}\n")
+    # before anything is allocated (scene.times() alone is 8 bytes a sample), FMU runs too
+    from .run_memory import check_run_memory
+    check_run_memory(scene.duration, scene.output_interval, scene.fidelity)
     progress = not (args.quiet or args.json)
     if fmu_arg is not None:
         path = _fmu_path(fmu_arg)
