@@ -115,6 +115,8 @@ def pytest_sessionfinish(session, exitstatus):
         return
     lines = [f"the test session left files behind in {what}: {len(files)}, e.g. "
              + ", ".join(files[:3]) for what, files in added.items()]
+    lines.append("(or another process wrote there while the tests ran; "
+                 "CHAINMODEL_TEST_LEFTOVERS=warn reports without failing)")
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
         reporter.write_line("")
