@@ -68,6 +68,10 @@ def test_the_check_sees_a_changed_number_and_ignores_timings():
     timing = body.replace("1 s  (real-time factor 0.999)", "2.5 s  (real-time factor 0.4)") \
         .replace('"wall_time_s": 0.5', '"wall_time_s": 0.7')
     assert examples.same(examples.mask(body), examples.mask(timing))
+    ratio = "tooth ratio      1.470588235  (exact 25/17 = 1.470588235, error {})\n"
+    assert examples.same(examples.mask(ratio.format("3.4e-13")), examples.mask(ratio.format("2e-16")))
+    assert not examples.same(examples.mask(ratio.format("6.5e-06")),
+                             examples.mask(ratio.format("6.6e-06")))
     for changed in (body.replace("607.64", "607.65"), body.replace('"a": 1.0', '"a": 1.001'),
                     body.replace('"a": 1.0', '"b": 1.0')):
         assert not examples.same(examples.mask(body), examples.mask(changed))
