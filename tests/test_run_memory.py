@@ -104,3 +104,16 @@ def test_real_command_answers_in_one_line(tmp_path):
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "1.2 TB of outputs" in proc.stderr
     assert time.perf_counter() - start < 30     # imports only (numba's); nothing allocated
+
+
+@pytest.mark.fmu
+def test_fmu_run_is_refused_before_it_starts(chaindrive_fmu, machine):
+    """simulate_fmu keeps the same time series: the same refusal, before the first step."""
+    from chainmodel.fmu import simulate_fmu
+    from chainmodel.scene import load_scene
+    scene = load_scene("xu2010").with_overrides(duration=1e4)
+    start = time.perf_counter()
+    with pytest.raises(RunTooLarge) as info:
+        simulate_fmu(chaindrive_fmu, scene)
+    assert time.perf_counter() - start < 30          # extraction only, no step
+    assert info.value.output_bytes == expected_samples(1e4) * outputs_per_sample() * 8
