@@ -145,7 +145,8 @@ def check_run_memory(duration: float, output_interval: float, fidelity: int,
     shorter = _sig3(fit * output_interval, up=False)
     raise RunTooLarge(
         f"a run of duration {duration:g} s at output_interval {output_interval:g} s would keep "
-        f"{samples} samples x {outputs} outputs x 8 bytes = {_gb(out)} of outputs (about "
+        f"{samples if samples < 1e15 else f'{samples:.3g}'} samples x {outputs} outputs x 8 "
+        f"bytes = {_gb(out)} of outputs (about "
         f"{_gb(total)} with the working arrays), more than the {_gb(limit)} allowed ({source}); "
         f"use a coarser output_interval (>= {coarser:g} s fits) or a shorter duration "
         f"(<= {shorter:g} s fits), or set {ENV_VAR} to allow more",
