@@ -3,6 +3,7 @@ the estimate (samples x outputs x 8 bytes, computed here independently) and what
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -99,8 +100,10 @@ def test_available_memory_is_read_from_the_system():
 def test_real_command_answers_in_one_line(tmp_path):
     """The installed entry point, as the issue ran it: one line, exit 2, at once."""
     start = time.perf_counter()
+    env = {k: v for k, v in os.environ.items() if k != run_memory.ENV_VAR}    # the default limit
     proc = subprocess.run([sys.executable, "-m", "chainmodel", "run", "xu2010", "--duration",
-                           "1e6"], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+                           "1e6"], capture_output=True, text=True, cwd=tmp_path, timeout=60,
+                          env=env)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "1.2 TB of outputs" in proc.stderr
     assert time.perf_counter() - start < 30     # imports only (numba's); nothing allocated
