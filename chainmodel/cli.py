@@ -145,12 +145,13 @@ def write_csv_columns(path: str | Path, columns: Mapping[str, Sequence[float]],
 
 
 def add_output_arguments(p: argparse.ArgumentParser, csv_help: str = "write the arrays as CSV",
-                         plot_help: str = "write a PNG figure (needs matplotlib)") -> None:
+                         plot_help: str = "write a figure (needs matplotlib)") -> None:
     g = p.add_argument_group("output")
     g.add_argument("--json", action="store_true",
                    help="print one JSON object (snake_case keys, SI units) and nothing else")
     g.add_argument("--csv", metavar="PATH", help=csv_help)
-    g.add_argument("--plot", metavar="PNG", help=plot_help)
+    g.add_argument("--plot", metavar="FILE", help=plot_help + "; .png, .pdf or .svg, by the "
+                   "file's extension")
 
 
 def add_drive_arguments(p: argparse.ArgumentParser) -> None:
@@ -224,8 +225,11 @@ def _describe_drive(drive) -> str:
 
 
 def _check_outputs(args) -> None:
-    """Fail before any work if --plot is asked for without matplotlib, or if an output file's
-    directory does not exist."""
+    """Fail before any work if --plot is asked for without matplotlib or with an extension
+    other than .png, .pdf and .svg, or if an output file's directory does not exist."""
+    if getattr(args, "plot", None):
+        from .plots import check_plot_path
+        check_plot_path(args.plot)
     for flag in ("csv", "plot"):
         path = getattr(args, flag, None)
         if path and not Path(path).resolve().parent.is_dir():
@@ -280,8 +284,9 @@ def register_run(subparsers) -> None:
     p.add_argument("--quiet", action="store_true",
                    help="no progress line and no summary table (files are still written)")
     add_output_arguments(p, csv_help="write every output's time series as CSV",
-                         plot_help="write a PNG: tensions, transmission error, torsional "
-                                   "vibration and spectra (+ chain snapshots at the multibody level)")
+                         plot_help="write a figure: tensions, transmission error, torsional "
+                                   "vibration and spectra (+ midspan deflection at levels 2-3, "
+                                   "chain snapshots at the multibody level)")
     p.set_defaults(handler=cmd_run)
 
 
@@ -370,6 +375,9 @@ def cmd_run(args) -> int:
         choice = choose(scene, args.outputs, args.accuracy)
         scene = scene.with_overrides(**choice.overrides)
         sys.stderr.write(f"chainmodel: {choice.message}\n")
+    # before anything is allocated (scene.times() alone is 8 bytes a sample), FMU runs too
+    from .run_memory import check_run_memory
+    check_run_memory(scene.duration, scene.output_interval, scene.fidelity)
     progress = not (args.quiet or args.json)
     if fmu_arg is not None:
         path = _fmu_path(fmu_arg)
@@ -479,7 +487,7 @@ def register_kinematics(subparsers) -> None:
                    help="driver angles over the tooth period (default 400)")
     p.add_argument("--speed-rpm", type=float, default=100.0, metavar="R",
                    help="constant driver speed [rpm] (default 100, as seed 000)")
-    add_output_arguments(p, plot_help="write a PNG like seed 000 Fig. 4")
+    add_output_arguments(p, plot_help="write a figure like seed 000 Fig. 4")
     p.set_defaults(handler=cmd_kinematics)
 
 
@@ -631,7 +639,7 @@ def register_wrap(subparsers) -> None:
     p.add_argument("--samples", type=int, default=200, metavar="K",
                    help="driver angles over the tooth period; the mean is over these "
                         "(default 200; min and max are refined beyond the samples)")
-    add_output_arguments(p, plot_help="write a PNG like seed 004 Fig. 2")
+    add_output_arguments(p, plot_help="write a figure like seed 004 Fig. 2")
     p.set_defaults(handler=cmd_wrap)
 
 

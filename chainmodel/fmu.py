@@ -185,6 +185,7 @@ class FMUSession:
 
         from .models import SimulationDiverged
         from .parameters import FIDELITY_NAMES
+        from .run_memory import check_run_memory
         from .scene import load_scene
         from .simulation import Result, _Progress
 
@@ -203,6 +204,7 @@ class FMUSession:
         in_vr = [by_name[n].valueReference for n in
                  ("input_shaft.angle", "input_shaft.speed", "load.torque")]
         out_vr = [by_name[n].valueReference for n in outputs]
+        check_run_memory(sc.duration, sc.output_interval, sc.fidelity, len(outputs))
         times = sc.times()
         data = np.empty((len(times), len(outputs)))
         bar = _Progress(progress, float(times[-1]),

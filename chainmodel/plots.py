@@ -1,13 +1,16 @@
 """Figures for the ``chainmodel`` command (matplotlib is the optional ``plot`` extra).
 
-Every function draws on a :class:`matplotlib.figure.Figure` with an Agg canvas and writes a PNG;
+Every function draws on a :class:`matplotlib.figure.Figure` with an Agg canvas and writes the
+format of the file's extension (.png, .pdf or .svg; :func:`check_plot_path` refuses others);
 pyplot and its global backend are never touched, so calling these from a notebook or a GUI
 program leaves the host's matplotlib state alone.
 
 * :func:`plot_run`: a simulated run, panels after seed 003 section 7 — span tensions over time
   (its Fig. 7), transmission error, torsional vibration of both sprockets (speed minus its
-  mean) and their amplitude spectra with the meshing frequency marked (its Fig. 10); when the
-  model kept snapshots with roller positions (the multibody level), the chain's shape and the
+  mean) and their amplitude spectra with the meshing frequency marked (its Fig. 10); at the
+  modal and multibody levels (2-3, which model the spans' transverse motion) the tight span's
+  midspan deflection over time and its amplitude spectrum; when the model kept snapshots
+  with roller positions (the multibody level), the chain's shape and the
   x/y motion of a roller crossing the tight span (its Fig. 8). Panels whose data are missing
   are left out.
 * :func:`plot_kinematics`: driven-sprocket position, velocity ratio and acceleration over one
@@ -29,7 +32,10 @@ from typing import Any, Mapping
 import numpy as np
 
 __all__ = ["PlottingUnavailable", "require_matplotlib", "amplitude_spectrum", "plot_run",
-           "plot_kinematics", "plot_wrap"]
+           "plot_kinematics", "plot_wrap", "PLOT_FORMATS", "check_plot_path"]
+
+#: file extensions a figure can be written as (matplotlib's Agg, PDF and SVG backends)
+PLOT_FORMATS = (".png", ".pdf", ".svg")
 
 INSTALL_HINT = "pip install 'chaindrive[plot]' (or pip install matplotlib)"
 
@@ -49,6 +55,18 @@ def require_matplotlib() -> None:
                                   f"{INSTALL_HINT}") from exc
 
 
+def check_plot_path(path: str | Path, flag: str = "--plot") -> str:
+    """The format of a figure file from its extension ("png", "pdf" or "svg"); ValueError
+    naming the allowed extensions for any other (called before the work, so a typo costs
+    nothing)."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in PLOT_FORMATS:
+        raise ValueError(f"{flag} {path}: cannot write a figure as "
+                         f"{repr(suffix) if suffix else 'a file without an extension'}; "
+                         f"name the file with one of {', '.join(PLOT_FORMATS)}")
+    return suffix[1:]
+
+
 def _figure(figsize: tuple[float, float]):
     require_matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -60,7 +78,7 @@ def _figure(figsize: tuple[float, float]):
 
 def _save(fig, path: str | Path) -> Path:
     path = Path(path)
-    fig.savefig(path, dpi=110, format="png")
+    fig.savefig(path, dpi=110, format=check_plot_path(path))
     return path
 
 
@@ -203,8 +221,40 @@ def _draw_track(fig, cell, track) -> None:
     ax_y.set_xlabel("time [s]")
 
 
+def _draw_midspan(fig, grid, row: int, result, mask, f_mesh: float) -> None:
+    """Tight span's midspan deflection over the run, and its amplitude spectrum over the
+    steady part with the meshing frequency and its harmonics marked (a span excited
+    parametrically answers near its own natural frequency, seed 004 section 5)."""
+    t = np.asarray(result.time, float)
+    w = 1e3 * np.asarray(result["tight_span.midspan_deflection"], float)
+    ax = fig.add_subplot(grid[row, 0])
+    ax.plot(t, w, lw=0.9, color="C4")
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("midspan deflection [mm]")
+    ax.set_title("tight span: transverse deflection at midspan")
+    ax.grid(alpha=0.3)
+    ax = fig.add_subplot(grid[row, 1])
+    f, amp = amplitude_spectrum(t[mask], w[mask])
+    if len(f):
+        ax.plot(f, amp, lw=0.9, color="C4", label="tight span, midspan")
+        f_max = float(f[-1])
+        if math.isfinite(f_mesh) and f_mesh > 0:
+            f_peak = float(f[int(np.argmax(amp))]) if np.any(amp > 0) else 0.0
+            f_max = min(f_max, max(6.5 * f_mesh, 1.25 * f_peak))
+        _mark_meshing(ax, f_mesh, f_max)
+        if f_max > 0:
+            ax.set_xlim(0, f_max)
+        ax.legend(fontsize="small")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("amplitude [mm]")
+    ax.set_title("amplitude spectrum of the midspan deflection (steady part)")
+    ax.grid(alpha=0.3)
+
+
 def plot_run(result, path: str | Path, summary: Mapping[str, Any] | None = None) -> Path:
-    """PNG of a simulated run (see module docstring); returns the path written."""
+    """Figure of a simulated run (module docstring) as the format of ``path``'s extension
+    (:data:`PLOT_FORMATS`); returns the path written."""
     from .analysis.summary import steady_window
     summary = dict(summary or result.summary())
     scene, drive = result.scene, result.scene.drive
@@ -214,7 +264,10 @@ def plot_run(result, path: str | Path, summary: Mapping[str, Any] | None = None)
     f_mesh = float(summary.get("meshing_frequency_hz", math.nan))
     snaps = _snapshot_rollers(result)
     track = _tight_span_track(drive, snaps, result, ts[0]) if snaps else None
-    rows = 3 if snaps else 2
+    # levels 0-1 give only the static sag there (a constant): no panel for it
+    span_row = 2 if result.fidelity >= 2 and "tight_span.midspan_deflection" in result else None
+    snap_row = (3 if span_row else 2) if snaps else None
+    rows = 2 + (span_row is not None) + (snap_row is not None)
     fig = _figure((12, 3.4 * rows))
     grid = fig.add_gridspec(rows, 2)
     fig.suptitle(f"{scene.name}: fidelity {result.fidelity} ({result.fidelity_name}), "
@@ -278,12 +331,14 @@ def plot_run(result, path: str | Path, summary: Mapping[str, Any] | None = None)
     ax.legend(fontsize="small")
     ax.grid(alpha=0.3)
 
+    if span_row is not None:
+        _draw_midspan(fig, grid, span_row, result, mask, f_mesh)
     if snaps:
-        _draw_geometry(fig.add_subplot(grid[2, 0]), drive, snaps, result)
+        _draw_geometry(fig.add_subplot(grid[snap_row, 0]), drive, snaps, result)
         if track is not None:
-            _draw_track(fig, grid[2, 1], track)
+            _draw_track(fig, grid[snap_row, 1], track)
         else:
-            ax = fig.add_subplot(grid[2, 1])
+            ax = fig.add_subplot(grid[snap_row, 1])
             ax.text(0.5, 0.5, "no roller crossed the tight span in the snapshots",
                     ha="center", va="center", transform=ax.transAxes)
             ax.set_axis_off()
@@ -309,7 +364,8 @@ def _segments(x: np.ndarray, y: np.ndarray, cut: float):
 
 
 def plot_kinematics(data: Mapping[str, Any], path: str | Path) -> Path:
-    """PNG like seed 000 Fig. 4 from the ``chainmodel kinematics --json`` dict."""
+    """Figure like seed 000 Fig. 4 from the ``chainmodel kinematics --json`` dict (format
+    from the extension of ``path``)."""
     x = np.asarray(data["tooth_period_fraction"], float)
     cut = float(data["release_fraction"])
     approx = data.get("approximate") or {}
@@ -342,7 +398,8 @@ def plot_kinematics(data: Mapping[str, Any], path: str | Path) -> Path:
 # --- wrapping length --------------------------------------------------------------------------
 
 def plot_wrap(data: Mapping[str, Any], path: str | Path) -> Path:
-    """PNG like seed 004 Fig. 2 from the ``chainmodel wrap --json`` dict."""
+    """Figure like seed 004 Fig. 2 from the ``chainmodel wrap --json`` dict (format from the
+    extension of ``path``)."""
     x = np.asarray(data["tooth_period_fraction"], float)
     d = data["drive"]
     p = float(d["pitch_m"])

@@ -12,6 +12,7 @@ import numpy as np
 
 from .models import ALL_OUTPUTS, SimulationDiverged  # noqa: F401  (re-exported)
 from .parameters import FIDELITY_NAMES
+from .run_memory import check_run_memory
 from .scene import Scene, load_scene
 
 __all__ = ["simulate", "Result", "run_scene"]
@@ -157,7 +158,11 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     ``batched``: where the stepper and model offer it (levels 1-3 with their compiled loops),
     run many communication points in one compiled call, outputs included - the same numbers as
     the per-point loop (``batched=False``, one ``Stepper.advance`` per point as the FMU steps),
-    without its Python overhead per point."""
+    without its Python overhead per point.
+
+    A run whose time series would not fit in memory is refused before anything is allocated
+    (:class:`chainmodel.run_memory.RunTooLarge`, a ValueError with the estimate and what fits)."""
+    check_run_memory(scene.duration, scene.output_interval, scene.fidelity)
     model = scene.model()
     scene.check_operating_point(model)
     times = scene.times()

@@ -472,6 +472,14 @@ def scene_reference(scene, out: str | Path, fmu: str | Path, host: str = "fmpy")
                            start_values=start, readme=readme)
 
 
+def _unit(name: str) -> str:
+    """Unit of an FMU output or input (the FMU's own), '-' where it has none."""
+    from ..models import ALL_OUTPUTS
+    units = {o.name: o.unit for o in ALL_OUTPUTS}
+    units.update({"input_shaft.angle": "rad", "input_shaft.speed": "rad/s", "load.torque": "N.m"})
+    return units.get(name) or "-"
+
+
 def plot_worst(results: Sequence[OutputCheck], path: str | Path, count: int = 6) -> Path:
     """Figure of the ``count`` outputs with the largest deviation relative to their tube."""
     import matplotlib
@@ -488,6 +496,7 @@ def plot_worst(results: Sequence[OutputCheck], path: str | Path, count: int = 6)
         ax.set_title(f"{r.scenario}: {r.output} - {'pass' if r.passed else 'FAIL'}, worst "
                      f"{r.worst:.3g} of the tube at {r.at:.4g} s", fontsize=8)
         ax.tick_params(labelsize=7)
+        ax.set_ylabel(f"{r.output} [{_unit(r.output)}]", fontsize=7)
     axes[0, 0].legend(fontsize=7)
     axes[-1, 0].set_xlabel("time [s]")
     fig.tight_layout()
@@ -544,6 +553,9 @@ def cmd_fmu_test(args) -> int:
         raise ValueError(f"FMU {args.fmu!r} does not exist; build it with `python build_fmu.py`")
     if args.scene and not args.record:
         raise ValueError("--scene is for --record DIR (record a scene as a new reference)")
+    if args.plot:
+        from ..plots import check_plot_path
+        check_plot_path(args.plot)          # before the runs: .png, .pdf or .svg
     try:
         outputs, inputs = fmu_variables(fmu)
     except Exception as exc:

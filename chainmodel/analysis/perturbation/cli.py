@@ -45,8 +45,8 @@ def register(subparsers) -> None:
                         "spacing; 71 gives the 0.05 grid of the docs, several minutes)")
     add_drive_arguments(p)
     add_output_arguments(p, csv_help="write the sweep as CSV columns",
-                         plot_help="write the figure as PNG (combined: <stem>_span.png and "
-                                   "<stem>_sprocket.png)")
+                         plot_help="write the figure (combined: <stem>_span.png and "
+                                   "<stem>_sprocket.png, or .pdf/.svg alike)")
     p.set_defaults(handler=run_frequency_response)
 
 
@@ -111,7 +111,9 @@ def run_frequency_response(args) -> int:
     c = coefficients(drive, _params(args.param), args.speed_rpm,
                      P_t=_reference(args.reference_tension), mode=args.mode)
     if args.plot:
+        from ...plots import check_plot_path
         from .plots import _plt
+        check_plot_path(args.plot)          # before the sweep: .png, .pdf or .svg
         _plt()                              # fail before the sweep if matplotlib is missing
     t0 = time.perf_counter()
     n = args.points

@@ -59,8 +59,8 @@ def plot_parametric(data: dict, path, extra: list[tuple[str, dict]] = ()) -> Pat
         xr = np.broadcast_to(data["numerical_ratio"], data["numerical_a"].shape)
         ax.plot(xr.ravel(), data["numerical_a"].ravel(), "o", mfc="none", color="k", ms=5,
                 label="eqs 100-101 integrated (random starts)")
-    ax.set_xlabel(r"$\Omega_2/\omega_m$")
-    ax.set_ylabel(r"span amplitude $a$ ($\xi_m$, units of $l$)")
+    ax.set_xlabel(r"$\Omega_2/\omega_m$ [-]")
+    ax.set_ylabel(r"span amplitude $a$ of $\xi_m$ [units of $l$]")
     ax.set_title("Primary parametric resonance of the tight span (eq 105)")
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
@@ -77,8 +77,8 @@ def plot_sprocket(data: dict, path, extra: list[tuple[str, dict]] = ()) -> Path:
     if "numerical_v" in data:
         ax.plot(data["numerical_ratio"], data["numerical_v"], "o", mfc="none", color="k", ms=5,
                 label="eqs 119-120 integrated")
-    ax.set_xlabel(r"$\Omega_2/\omega_\theta$")
-    ax.set_ylabel(r"sprocket amplitude $v$ ($u_1$, units of $l$)")
+    ax.set_xlabel(r"$\Omega_2/\omega_\theta$ [-]")
+    ax.set_ylabel(r"sprocket amplitude $v$ of $u_1$ [units of $l$]")
     ax.set_title("Primary external resonance of the driven sprocket (eq 121)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
@@ -105,12 +105,12 @@ def _combined(data: dict, path, key: str, sections_axis: str, sections, title: s
                 diff = np.abs(Z[r, j] - Z[0, j]) > 1e-3 * np.nanmax(Z)
                 ax0.plot(s2[diff], Z[r, j][diff], "o", mfc="none", ms=4, color="tab:red",
                          label="other start (coexisting)" if j == idx[0] and r == 1 else None)
-        ax0.set_xlabel(r"$\sigma_2/\omega_m$")
+        ax0.set_xlabel(r"$\sigma_2/\omega_m$ [-]")
     else:
         idx = _nearest(s2, sections)
         for j, st in zip(idx, styles):
             ax0.plot(si, Z[0, :, j], st, color="k", label=rf"$\sigma_2/\omega_m$ = {s2[j]:.2f}")
-        ax0.set_xlabel(r"$\sigma_i/\omega_m$")
+        ax0.set_xlabel(r"$\sigma_i/\omega_m$ [-]")
     ax0.set_ylabel(ylabel)
     ax0.legend(fontsize=8)
     ax0.grid(alpha=0.3)
@@ -126,8 +126,8 @@ def _combined(data: dict, path, key: str, sections_axis: str, sections, title: s
     t2 = data.get("sigma_i_table2_ratio")
     if t2 is not None and si.min() <= t2 <= si.max():
         ax1.axhline(t2, color="tab:orange", lw=1, ls="--", label="C1, Table 2, 400 rpm")
-    ax1.set_xlabel(r"$\sigma_2/\omega_m$")
-    ax1.set_ylabel(r"$\sigma_i/\omega_m$")
+    ax1.set_xlabel(r"$\sigma_2/\omega_m$ [-]")
+    ax1.set_ylabel(r"$\sigma_i/\omega_m$ [-]")
     ax1.legend(fontsize=7, loc="lower right")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
@@ -139,14 +139,14 @@ def plot_combined_span(data: dict, path, sections=(-1.9, -1.1, -0.3)) -> Path:
     start; circles where the large start ends elsewhere)."""
     return _combined(data, path, "a", "sigma_i", sections,
                      "Combined parametric + internal resonance: span amplitude a "
-                     f"(eqs 129-132, policy '{data['policy']}')", r"$a$")
+                     f"(eqs 129-132, policy '{data['policy']}')", r"span amplitude $a$ [units of $l$]")
 
 
 def plot_combined_sprocket(data: dict, path, sections=(-0.9, -0.5, 0.0)) -> Path:
     """Fig 9: sprocket amplitude v in the combined case."""
     return _combined(data, path, "v", "sigma2", sections,
                      "Combined parametric + internal resonance: sprocket amplitude v "
-                     f"(eqs 129-132, policy '{data['policy']}')", r"$v$")
+                     f"(eqs 129-132, policy '{data['policy']}')", r"sprocket amplitude $v$ [units of $l$]")
 
 
 def plot_case(case: str, data: dict, path, extra=()) -> list[Path]:

@@ -22,7 +22,8 @@ import numpy as np
 from ...plots import require_matplotlib
 from .table import as_float_array
 
-__all__ = ["plot_campbell", "plot_resonance_map", "speed_axis", "default_map_metric"]
+__all__ = ["plot_campbell", "plot_resonance_map", "speed_axis", "default_map_metric",
+           "axis_label"]
 
 RPM = 2 * math.pi / 60
 _MAX_PANELS = 6
@@ -39,6 +40,27 @@ def _figure(figsize):
     return fig
 
 
+#: units of the scene settings a study can vary (chainmodel.scene.SETTINGS)
+SETTING_UNITS = {"input_speed_rpm": "rpm", "input_speed": "rad/s", "load_torque": "N.m",
+                 "static_tension": "N", "ramp_time": "s", "duration": "s",
+                 "output_interval": "s", "fidelity": "-"}
+
+
+def axis_label(name: str) -> str:
+    """``name [unit]`` for a varied setting, a parameter (its schema unit) or a metric column
+    (:data:`~.metrics.METRIC_UNITS`); ``[-]`` for a dimensionless one."""
+    from ...parameters import BY_NAME, canonical_name
+    from .metrics import METRIC_UNITS
+    if name in SETTING_UNITS:
+        unit = SETTING_UNITS[name]
+    elif name in METRIC_UNITS:
+        unit = METRIC_UNITS[name]
+    else:
+        spec = BY_NAME.get(canonical_name(name) or "")
+        unit = spec.unit if spec is not None else ""
+    return f"{name} [{unit or '-'}]"
+
+
 def speed_axis(varied: Sequence[str]) -> tuple[str, str, float]:
     """(column, axis label, factor to the plotted unit) of the x axis: the input speed in rpm
     where the study varies it, else the first varied setting."""
@@ -46,7 +68,7 @@ def speed_axis(varied: Sequence[str]) -> tuple[str, str, float]:
         return "input_speed_rpm", "input speed [rpm]", 1.0
     if "input_speed" in varied:
         return "input_speed", "input speed [rpm]", 1.0 / RPM
-    return varied[0], varied[0], 1.0
+    return varied[0], axis_label(varied[0]), 1.0
 
 
 def default_map_metric(cols: dict) -> str:
@@ -180,7 +202,7 @@ def plot_resonance_map(cols: dict, varied: Sequence[str], path: str | Path,
     if not others:
         ax.plot(x[sel], z[sel], "o-")
         ax.set_xlabel(x_label)
-        ax.set_ylabel(metric)
+        ax.set_ylabel(axis_label(metric))
     else:
         y_name = others[0]
         y = as_float_array(cols[y_name])
@@ -209,9 +231,9 @@ def plot_resonance_map(cols: dict, varied: Sequence[str], path: str | Path,
         if hit.any():
             ax.plot(xs[hit], ys[hit], "x", color="white", ms=4, label="resonance hit")
             ax.legend(fontsize=7, loc="upper left")
-        fig.colorbar(image, ax=ax, label=metric)
+        fig.colorbar(image, ax=ax, label=axis_label(metric))
         ax.set_xlabel(x_label)
-        ax.set_ylabel(y_name)
+        ax.set_ylabel(axis_label(y_name))
     ax.set_title(title or f"resonance map: {metric}{note}", fontsize=9)
     path = Path(path)
     fig.savefig(path, dpi=110)
