@@ -467,11 +467,27 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
     ]
     for k, note in enumerate(s["notes"]):
         rows.append(("notes" if k == 0 else "", note))
-    for k, text in enumerate(s.get("assumed", ())):
+    for k, text in enumerate(_assumed_rows(s.get("assumed", ()))):
         rows.append(("assumed" if k == 0 else "", text))
     for k, text in enumerate(s.get("warnings", ())):
         rows.append(("WARNING" if k == 0 else "", text))
     return _table(rows)
+
+
+def _assumed_rows(lines: Sequence[str]) -> list[str]:
+    """The table's ``assumed`` block: a preset's cited values counted on one line per source
+    (the user chose them by naming the preset; ``--json`` lists each), every other assumed
+    value (a chain's law, a schema default) on a line of its own."""
+    rows, by_preset = [], {}
+    for text in lines:
+        source = text[text.index("  (") + 3:-1] if "  (" in text else ""
+        if source.startswith("preset "):
+            by_preset.setdefault(source, []).append(text.split(" = ")[0])
+        else:
+            rows.append(text)
+    head = [f"{len(names)} values from {source}: {', '.join(names)}"
+            for source, names in by_preset.items()]
+    return head + rows
 
 
 # --- kinematics -------------------------------------------------------------------------------
