@@ -241,6 +241,15 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
         from .fidelity_auto import choose
         choice = choose(sc, outputs, accuracy)
         sc = sc.with_overrides(**choice.overrides)
-    result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    try:
+        result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    except SimulationDiverged as exc:
+        # a chain far too long or short for its centre distance makes level 3 diverge at once;
+        # say so rather than leave the step blamed (chainmodel.validity)
+        from .validity import geometry_problems
+        found = geometry_problems(sc.drive, sc.parameters)
+        if not found:
+            raise
+        raise SimulationDiverged(f"{exc}. The likely cause is not the step: {found[0].message}") from exc
     result.auto_choice = choice
     return result

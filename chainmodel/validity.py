@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -78,6 +79,20 @@ class Problem:
     def __str__(self) -> str:
         return self.message
 
+    @property
+    def cause(self) -> str:
+        """The problem in a few words (the CLI's one-line error)."""
+        return CAUSES.get(self.code, self.code)
+
+
+CAUSES = {"chain_too_long": "chain too long for the centre distance",
+          "chain_too_short": "chain too short for the centre distance",
+          "breaking_load": "force above the chain's breaking load",
+          "penetration": "roller penetration beyond the seat clearance",
+          "penetration_roller": "roller penetration beyond the roller radius",
+          "teeth_skipped": "teeth skipped",
+          "driven_reversal": "driven sprocket reversing under forward drive"}
+
 
 # --- geometry (every level) ---------------------------------------------------------------------
 
@@ -91,12 +106,10 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
     docstring)."""
     if drive.links is None:
         return []
-    from .kinematics.wrapping import wrap_length_range
-    lmin, lmean, lmax = wrap_length_range(drive)
+    lmin, lmean, lmax = _wrap_range(drive)
     M, p = drive.links, drive.pitch
     play = chain_play(drive, params)
     fit = max(4, round(lmean / p))
-    where = _tight_distance(drive)
     if M * p - lmax > play:
         extra = M * p - lmax
         return [Problem("chain_too_long", (
@@ -105,7 +118,7 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
             f"{1e3 * drive.centre_distance:.6g} mm ({lmax / p:.3f} pitches at most over a tooth "
             f"period, seed 004 eq 13), more than its joints' play ({M} x chain.joint_clearance = "
             f"{1e3 * play:.3g} mm): the slack span hangs and the static tension is the sag's, "
-            f"not a taut chain's; use drive.links = {fit}{where}"))]
+            f"not a taut chain's; use drive.links = {fit}{_tight_distance(drive)}"))]
     if lmin - M * p > play:
         short = lmin - M * p
         return [Problem("chain_too_short", (
@@ -113,8 +126,14 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
             f"its wrapping length at centre distance {1e3 * drive.centre_distance:.6g} mm "
             f"({lmin / p:.3f} pitches at least over a tooth period, seed 004 eq 13), more than "
             f"its joints' play ({M} x chain.joint_clearance = {1e3 * play:.3g} mm): every link "
-            f"is stretched at rest; use drive.links = {fit}{where}"))]
+            f"is stretched at rest; use drive.links = {fit}{_tight_distance(drive)}"))]
     return []
+
+
+@lru_cache(maxsize=64)
+def _wrap_range(drive: Drive) -> tuple[float, float, float]:
+    from .kinematics.wrapping import wrap_length_range
+    return wrap_length_range(drive)
 
 
 def _tight_distance(drive: Drive) -> str:
@@ -195,6 +214,13 @@ class Monitor:
         self._reported: set[str] = set()
         self._index = ({n: names.index(n) for n in OUTPUTS} if names is not None
                        and all(n in names for n in OUTPUTS) else None)
+        # below these no output check can fire: update() then skips problems() (FMU steps)
+        bl = breaking_load(drive, self.params)
+        self._force_alarm = math.inf if bl is None else bl[0]
+        if self.level == 3:
+            self._force_alarm = min(self._force_alarm, self.params["contact.stiffness"]
+                                    * seat_clearance_limit(self.params))
+        self._half_tooth = math.pi / drive.n_driven
 
     # -- sample by sample --------------------------------------------------------------------
     def update(self, t: float, row, input_speed: float) -> list[str]:
@@ -207,6 +233,10 @@ class Monitor:
                      float(row[ix["transmission_error"]]), float(row[ix["contact.max_force"]]),
                      float(row[ix["chain.max_link_tension"]]),
                      float(row[ix["chain.min_link_tension"]]), float(input_speed))
+        s = self.stats
+        if not (s.reversed_samples or abs(s.drift) > self._half_tooth
+                or max(s.max_contact, s.max_link, -s.min_link) > self._force_alarm):
+            return []
         new = []
         for p in self.problems():
             if p.code not in self._reported:
