@@ -214,6 +214,9 @@ class Monitor:
         self._reported: set[str] = set()
         self._index = ({n: names.index(n) for n in OUTPUTS} if names is not None
                        and all(n in names for n in OUTPUTS) else None)
+        self._ix = tuple(self._index[n] for n in OUTPUTS) if self._index else ()
+        self._k = 0                 # whole tooth periods of the driver at the last sample
+        self._alarm = (False, False, 0.0)
         # below these no output check can fire: update() then skips problems() (FMU steps)
         bl = breaking_load(drive, self.params)
         self._force_alarm = math.inf if bl is None else bl[0]
@@ -228,15 +231,16 @@ class Monitor:
         problems that appear with it (each problem once per run)."""
         if self._index is None:
             return []
-        ix = self._index
-        self._sample(float(t), float(row[ix["driver.angle"]]), float(row[ix["driven.speed"]]),
-                     float(row[ix["transmission_error"]]), float(row[ix["contact.max_force"]]),
-                     float(row[ix["chain.max_link_tension"]]),
-                     float(row[ix["chain.min_link_tension"]]), float(input_speed))
+        a, b, c, d, e, f = self._ix
+        self._sample(float(t), float(row[a]), float(row[b]), float(row[c]), float(row[d]),
+                     float(row[e]), float(row[f]), float(input_speed))
         s = self.stats
-        if not (s.reversed_samples or abs(s.drift) > self._half_tooth
-                or max(s.max_contact, s.max_link, -s.min_link) > self._force_alarm):
+        force = max(s.max_contact, s.max_link, -s.min_link)
+        alarm = (s.reversed_samples > 0, abs(s.drift) > self._half_tooth,
+                 force if force > self._force_alarm else 0.0)
+        if alarm == self._alarm:        # nothing that could raise a new problem has changed
             return []
+        self._alarm = alarm
         new = []
         for p in self.problems():
             if p.code not in self._reported:
@@ -263,9 +267,10 @@ class Monitor:
                 if math.isnan(s.t_reversal):
                     s.t_reversal = t
                 s.reversal = min(s.reversal, along)
-        if self._last is not None:
-            a0, e0, _ = self._last
-            self._crossings(a0, e0, phi1, te, t)
+        k = math.floor((phi1 - phi0) / self.period)
+        if k != self._k and self._last is not None:
+            self._crossings(self._last[0], self._last[1], phi1, te, t)
+        self._k = k
         self._last = (phi1, te, t)
 
     def _crossings(self, a0, e0, a1, e1, t):
@@ -329,6 +334,7 @@ class Monitor:
             self._crossings(float(phi1[i]), float(te[i]), float(phi1[i + 1]), float(te[i + 1]),
                             float(t[i + 1]))
         self._last = (float(phi1[-1]), float(te[-1]), float(t[-1]))
+        self._k = int(k[-1])
 
     # -- the findings ----------------------------------------------------------------------------
     def problems(self) -> list[Problem]:

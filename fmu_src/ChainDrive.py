@@ -553,8 +553,11 @@ class ChainDrive(Fmi2Slave):
         return stepper
 
     def _store_row(self, row):
-        """The outputs row of the stepper (ALL_OUTPUTS order) into the value table."""
-        self._real.update(zip(self._output_vr_list, row.tolist()))
+        """The outputs row of the stepper (ALL_OUTPUTS order) into the value table; returns the
+        values as a list."""
+        values = row.tolist()
+        self._real.update(zip(self._output_vr_list, values))
+        return values
 
     def _acceleration(self, t: float, speed: float) -> float:
         """Backward difference of the speed input between communication points (0 at the
@@ -640,10 +643,10 @@ class ChainDrive(Fmi2Slave):
                                f"{_why(exc)}"),
                      Fmi2Status.discard)
             return False
-        self._store_row(row)
+        values = self._store_row(row)
         self._prev_t, self._prev_speed = current_time, speed
         self._stale = False
-        self._check_validity(current_time + step_size, row, speed)
+        self._check_validity(current_time + step_size, values, speed)
         return True
 
     def _check_validity(self, t, row, speed, found=()):
