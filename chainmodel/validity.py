@@ -109,7 +109,6 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
     lmin, lmean, lmax = _wrap_range(drive)
     M, p = drive.links, drive.pitch
     play = chain_play(drive, params)
-    fit = max(4, round(lmean / p))
     if M * p - lmax > play:
         extra = M * p - lmax
         return [Problem("chain_too_long", (
@@ -117,8 +116,8 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
             f"pitches) longer than its wrapping length at centre distance "
             f"{1e3 * drive.centre_distance:.6g} mm ({lmax / p:.3f} pitches at most over a tooth "
             f"period, seed 004 eq 13), more than its joints' play ({M} x chain.joint_clearance = "
-            f"{1e3 * play:.3g} mm): the slack span hangs and the static tension is the sag's, "
-            f"not a taut chain's; use drive.links = {fit}{_tight_distance(drive)}"))]
+            f"{1e3 * play:.3g} mm): the slack span hangs in a sag instead of the taut span the "
+            f"models start from; {_what_fits(drive, params, lmin, lmax, longest=True)}"))]
     if lmin - M * p > play:
         short = lmin - M * p
         return [Problem("chain_too_short", (
@@ -126,7 +125,7 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
             f"its wrapping length at centre distance {1e3 * drive.centre_distance:.6g} mm "
             f"({lmin / p:.3f} pitches at least over a tooth period, seed 004 eq 13), more than "
             f"its joints' play ({M} x chain.joint_clearance = {1e3 * play:.3g} mm): every link "
-            f"is stretched at rest; use drive.links = {fit}{_tight_distance(drive)}"))]
+            f"is stretched at rest; {_what_fits(drive, params, lmin, lmax, longest=False)}"))]
     return []
 
 
@@ -136,13 +135,23 @@ def _wrap_range(drive: Drive) -> tuple[float, float, float]:
     return wrap_length_range(drive)
 
 
-def _tight_distance(drive: Drive) -> str:
+def _what_fits(drive: Drive, params: Mapping[str, Any], lmin: float, lmax: float,
+               longest: bool) -> str:
+    """What to change: the link count nearest to the chain's that fits this centre distance
+    within its play (L_min / (p + c) <= M <= L_max / (p - c), and no shorter than Drive takes),
+    and the centre distance at which the chain's own links wrap tightly."""
+    p, c = drive.pitch, float(params.get("chain.joint_clearance", 0.0))
+    lo = max(math.ceil(lmin / (p + c) - 1e-9), math.ceil(lmin * (1.0 - 2e-3) / p - 1e-9), 4)
+    hi = math.floor(lmax / (p - c) + 1e-9) if c < p else lo
+    links = (f"use drive.links = {hi if longest else lo}" if lo <= hi else
+             "no whole number of links fits this centre distance within the play")
     try:
-        tight = Drive.from_links(drive.n_driver, drive.n_driven, drive.pitch, drive.links)
+        tight = Drive.from_links(drive.n_driver, drive.n_driven, p, drive.links)
     except ValueError:  # pragma: no cover - only for chains that cannot wrap at all
-        return ""
-    return (f", or drive.centre_distance = {1e3 * tight.centre_distance:.6g} mm (0: the "
-            f"distance at which {drive.links} links wrap tightly)")
+        return links
+    return (f"{links}{', or' if lo <= hi else '; use'} drive.centre_distance = "
+            f"{tight.centre_distance:.6g} m (0: the distance at which {drive.links} links wrap "
+            f"tightly)")
 
 
 # --- thresholds -----------------------------------------------------------------------------------
