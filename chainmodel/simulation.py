@@ -250,6 +250,7 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
         found = geometry_problems(sc.drive, sc.parameters)
         if not found:
             raise
-        raise SimulationDiverged(f"{exc}. The likely cause is not the step: {found[0].message}") from exc
+        raise SimulationDiverged(f"{exc}. The likely cause is not the step: "
+                                 f"{found[0].message}") from exc
     result.auto_choice = choice
     return result

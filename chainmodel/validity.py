@@ -80,6 +80,12 @@ class Problem:
         return self.message
 
     @property
+    def text(self) -> str:
+        """The sentence as warnings show it: an invalid result's starts "the result is not
+        valid: "."""
+        return ("the result is not valid: " if self.invalid else "") + self.message
+
+    @property
     def cause(self) -> str:
         """The problem in a few words (the CLI's one-line error)."""
         return CAUSES.get(self.code, self.code)
@@ -254,7 +260,7 @@ class Monitor:
         for p in self.problems():
             if p.code not in self._reported:
                 self._reported.add(p.code)
-                new.append(("the result is not valid: " if p.invalid else "") + p.message)
+                new.append(p.text)
         return new
 
     def _sample(self, t, phi1, w2, te, fc, tmax, tmin, w_in):

@@ -650,9 +650,10 @@ class ChainDrive(Fmi2Slave):
         return True
 
     def _check_validity(self, t, row, speed, found=()):
-        """Log as fmi2Warning each validity problem (chainmodel.validity) when it first
-        appears: ``found`` given, the outputs' checks of this sample."""
-        texts = [str(p) for p in found]
+        """Log as fmi2Warning each validity problem (chainmodel.validity) once, when it first
+        appears: ``found`` (the geometry's, at initialization), then what the outputs' checks
+        find with this sample."""
+        texts = [p.text for p in found]
         if self._monitor is not None:
             texts += self._monitor.update(t, row, speed)
         for text in texts:

@@ -89,7 +89,7 @@ def summarise(result) -> dict:
                         "reported, and the peaks miss the tooth-periodic ripple")
         freq = math.nan
     found = getattr(result, "problems", [])
-    warnings += [("the result is not valid: " if p.invalid else "") + p.message for p in found]
+    warnings += [p.text for p in found]
     out = {
         "scene": scene.name,
         "fidelity": result.fidelity_name,
