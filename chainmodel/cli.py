@@ -433,6 +433,12 @@ def cmd_run(args) -> int:
     if not args.json and not args.quiet:
         for what, path in written:
             print(f"wrote {what} to {path}")
+    if not out.get("valid", True):
+        # the figures are printed (and written) for inspection, but they are not a drive's
+        why = ", ".join(p.cause for p in result.problems if p.invalid)
+        sys.stderr.write(f"chainmodel: error: the result is not valid ({why}); the warnings "
+                         "say why and what to change\n")
+        return 3
     return 0
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import sys
 import time as _time
+from functools import cached_property
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -71,10 +72,25 @@ class Result:
         from .analysis.summary import summarise
         return summarise(self)
 
+    @cached_property
+    def problems(self) -> list:
+        """Where this result leaves the model's validity (chainmodel.validity: the chain's
+        length against its centre distance, the breaking load, level 3's penetration, teeth
+        skipped, driven-speed reversal), as validity.Problem s; their sentences are also in
+        :attr:`warnings`."""
+        from .validity import result_problems
+        return result_problems(self)
+
+    @property
+    def valid(self) -> bool:
+        """False when a problem makes the result meaningless (teeth skipped, a roller inside a
+        tooth: ``Problem.invalid``); ``chainmodel run`` then exits with status 3."""
+        return not any(p.invalid for p in self.problems)
+
     @property
     def warnings(self) -> list[str]:
         """What the summary warns about (a short steady window, an output interval that cannot
-        resolve the meshing frequency); the CLI prints them."""
+        resolve the meshing frequency, the validity problems); the CLI prints them."""
         notes = [self.auto_choice.message] if self.auto_choice is not None else []
         return list(self.summary()["warnings"]) + notes
 
@@ -230,6 +246,16 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
         from .fidelity_auto import choose
         choice = choose(sc, outputs, accuracy)
         sc = sc.with_overrides(**choice.overrides)
-    result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    try:
+        result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    except SimulationDiverged as exc:
+        # a chain far too long or short for its centre distance makes level 3 diverge at once;
+        # say so rather than leave the step blamed (chainmodel.validity)
+        from .validity import geometry_problems
+        found = geometry_problems(sc.drive, sc.parameters)
+        if not found:
+            raise
+        raise SimulationDiverged(f"{exc}. The likely cause is not the step: "
+                                 f"{found[0].message}") from exc
     result.auto_choice = choice
     return result

@@ -202,7 +202,8 @@ def _vendored_chainmodel(resources: str):
     elif not Path(sys.modules[alias].__path__[0]).is_dir():
         _repoint(alias, root)
     mod = {name: importlib.import_module(f"{alias}.{name}")
-           for name in ("parameters", "models", "integrate", "scene", "fidelity_auto")}
+           for name in ("parameters", "models", "integrate", "scene", "fidelity_auto",
+                        "validity")}
     mod["package"] = sys.modules[alias]
     return mod
 
@@ -323,6 +324,8 @@ class ChainDrive(Fmi2Slave):
         self._P, self._M, self._I, self._S = (lib["parameters"], lib["models"],
                                               lib["integrate"], lib["scene"])
         self._lib_auto = lib["fidelity_auto"]
+        self._validity = lib["validity"]
+        self._monitor = None         # chainmodel.validity.Monitor of the run (fmi2Warning logs)
         self.version = getattr(lib["package"], "__version__", None)
         self.default_experiment = DEFAULT_EXPERIMENT
 
@@ -543,13 +546,18 @@ class ChainDrive(Fmi2Slave):
                                        tolerance=params["solver.tolerance"], x0=x0)
         if state is not None:
             stepper.set_state(state)
+        else:   # a new run: its validity checks start afresh
+            self._monitor = self._validity.Monitor(drive, params, level, self._output_names)
         self._stepper, self._model_params = stepper, params
         self._params_changed = False
         return stepper
 
     def _store_row(self, row):
-        """The outputs row of the stepper (ALL_OUTPUTS order) into the value table."""
-        self._real.update(zip(self._output_vr_list, row.tolist()))
+        """The outputs row of the stepper (ALL_OUTPUTS order) into the value table; returns the
+        values as a list."""
+        values = row.tolist()
+        self._real.update(zip(self._output_vr_list, values))
+        return values
 
     def _acceleration(self, t: float, speed: float) -> float:
         """Backward difference of the speed input between communication points (0 at the
@@ -595,6 +603,8 @@ class ChainDrive(Fmi2Slave):
         self._store_row(row)
         self._stale = False
         self._initialized = True
+        self._check_validity(st.t, row, u.speed,
+                             self._validity.geometry_problems(st.model.drive, self._model_params))
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
               if d.startswith(self._M.base.QUASI_STATIC)]
@@ -633,10 +643,21 @@ class ChainDrive(Fmi2Slave):
                                f"{_why(exc)}"),
                      Fmi2Status.discard)
             return False
-        self._store_row(row)
+        values = self._store_row(row)
         self._prev_t, self._prev_speed = current_time, speed
         self._stale = False
+        self._check_validity(current_time + step_size, values, speed)
         return True
+
+    def _check_validity(self, t, row, speed, found=()):
+        """Log as fmi2Warning each validity problem (chainmodel.validity) once, when it first
+        appears: ``found`` (the geometry's, at initialization), then what the outputs' checks
+        find with this sample."""
+        texts = [p.text for p in found]
+        if self._monitor is not None:
+            texts += self._monitor.update(t, row, speed)
+        for text in texts:
+            self.log(_fmi_text(text), Fmi2Status.warning)
 
     def terminate(self):
         pass

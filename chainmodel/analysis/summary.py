@@ -88,6 +88,8 @@ def summarise(result) -> dict:
                         "tooth period): the dominant frequency would be an alias and is not "
                         "reported, and the peaks miss the tooth-periodic ripple")
         freq = math.nan
+    found = getattr(result, "problems", [])
+    warnings += [p.text for p in found]
     out = {
         "scene": scene.name,
         "fidelity": result.fidelity_name,
@@ -120,5 +122,7 @@ def summarise(result) -> dict:
         "startup_time_s": (float(result.stats["startup_time"])
                            if "startup_time" in (result.stats or {}) else None),
         "warnings": warnings,
+        # False when a validity problem makes the figures meaningless (chainmodel.validity)
+        "valid": not any(p.invalid for p in found),
     }
     return out

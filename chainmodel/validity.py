@@ -1,0 +1,450 @@
+"""Where a result is valid: pure checks from (drive, parameters, outputs) to a list of problems
+(issue 21 item 5; docs/stability.md "Where a result is valid", docs/multibody.md "Validity
+monitors"). Like fmpy's ``validation.py``, nothing here raises: every check returns
+:class:`Problem` s, each naming its cause, the numbers and what to change. ``Problem.invalid``
+marks a result that means nothing (``Result.valid`` is then False, ``chainmodel run`` exits 3);
+the others are warnings (``Result.warnings``, the CLI's WARNING rows, fmi2Warning in the FMU).
+
+Checks and their thresholds (each from a standard, the model's own law or geometry):
+
+* **chain length** (every level): the chain of M links is compared with the wrapping length
+  L(phi) of the rigid layout over one tooth period (seed 004 section 2, eq 13;
+  ``kinematics.wrapping.wrap_length_range``). Its play is the pin-bushing clearance of every
+  joint, M ``chain.joint_clearance`` (ISO 606: bush bore minus pin diameter). Too long:
+  M p - L_max > play (slack at every instant by more than its joints can take up: the slack
+  span hangs, which levels 0-2's straight spans do not model); too short:
+  L_min - M p > play (it must stretch elastically at every instant). ``Drive`` itself refuses a
+  chain shorter than L_min by 0.2 % or more, which for ISO clearances (0.3 % of a 10B pitch) comes
+  first.
+* **breaking load** (every level): the largest contact force, link tension or link compression
+  against parameter ``chain.breaking_load`` when the mapping has it, else the ISO 606 minimum
+  tensile strength of the ``presets.ISO606`` chain of this pitch (and roller diameter; of two
+  matches the lower). No check for a pitch ISO 606 does not list.
+* **penetration** (level 3): the roller-seat contact is a penalty law,
+  F_n = max(0, k_c delta + c_c d(delta)/dt) with delta the overlap beyond the seat clearance
+  (``multibody_kernels._accel_loops``), so the elastic penetration is delta = F_n / k_c
+  (``contact.max_force`` / ``contact.stiffness``; the damper's share is left in). Warning beyond
+  the largest seat clearance ISO 606 allows for the roller, r_i,max - d1/2 =
+  0.005 d1 + 0.069 d1^(1/3) mm (or the model's own R_t - R_r if larger): the roller then sits
+  deeper in the tooth than the loosest standard seat would let it move freely, a deformation no
+  tooth takes elastically, so the penalty law is outside its range. Invalid beyond the roller
+  radius: the roller centre would be inside the tooth.
+* **teeth skipped** (levels 1-3): at every whole driver tooth period (driver angle
+  phi1_0 + k 2 pi / z1) the transmission error phi2 - (z1 / z2) phi1 returns to its start while
+  the chain stays seated (the tooth-periodic polygon part cancels). A change of more than half
+  a driven tooth, pi / z2, means a roller has passed a tooth tip: invalid. Over k periods that
+  is a mean speed ratio off z1 / z2 by more than 1 / (2k) relative.
+* **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
+  direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
+  level 3's initial layout is over by then). A warning: a torsional vibration larger than the
+  mean speed is physics a model may hold (a sudden start rings it), but it is resonance or slack
+  chain, and the means mix both directions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .geometry import Drive
+
+__all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load", "seat_clearance_limit",
+           "output_problems", "problems", "result_problems", "Monitor", "REVERSAL_SPEED"]
+
+#: a driven speed against the input's direction by more than this [rad/s] is a reversal
+REVERSAL_SPEED = 1e-3
+#: pitches [m] match an ISO 606 chain's within this relative difference
+_PITCH_MATCH = 1e-3
+#: roller diameters [m] match within this
+_ROLLER_MATCH = 1e-5
+
+OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_force",
+           "chain.max_link_tension", "chain.min_link_tension")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One finding: ``code`` (chain_too_long, chain_too_short, breaking_load, penetration,
+    penetration_roller, teeth_skipped, driven_reversal), the sentence, and whether it makes the
+    result meaningless."""
+
+    code: str
+    message: str
+    invalid: bool = False
+
+    def __str__(self) -> str:
+        return self.message
+
+    @property
+    def text(self) -> str:
+        """The sentence as warnings show it: an invalid result's starts "the result is not
+        valid: "."""
+        return ("the result is not valid: " if self.invalid else "") + self.message
+
+    @property
+    def cause(self) -> str:
+        """The problem in a few words (the CLI's one-line error)."""
+        return CAUSES.get(self.code, self.code)
+
+
+CAUSES = {"chain_too_long": "chain too long for the centre distance",
+          "chain_too_short": "chain too short for the centre distance",
+          "breaking_load": "force above the chain's breaking load",
+          "penetration": "roller penetration beyond the seat clearance",
+          "penetration_roller": "roller penetration beyond the roller radius",
+          "teeth_skipped": "teeth skipped",
+          "driven_reversal": "driven sprocket reversing under forward drive"}
+
+
+# --- geometry (every level) ---------------------------------------------------------------------
+
+def chain_play(drive: Drive, params: Mapping[str, Any]) -> float:
+    """Length the chain gives or takes without load [m]: M ``chain.joint_clearance``."""
+    return (drive.links or 0) * float(params.get("chain.joint_clearance", 0.0))
+
+
+def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
+    """The chain too long or too short for its centre distance by more than its play (module
+    docstring)."""
+    if drive.links is None:
+        return []
+    lmin, lmean, lmax = _wrap_range(drive)
+    M, p = drive.links, drive.pitch
+    play = chain_play(drive, params)
+    if M * p - lmax > play:
+        extra = M * p - lmax
+        return [Problem("chain_too_long", (
+            f"the chain is too long: drive.links = {M} is {1e3 * extra:.4g} mm ({extra / p:.3g} "
+            f"pitches) longer than its wrapping length at centre distance "
+            f"{1e3 * drive.centre_distance:.6g} mm ({lmax / p:.3f} pitches at most over a tooth "
+            f"period, seed 004 eq 13), more than its joints' play ({M} x chain.joint_clearance = "
+            f"{1e3 * play:.3g} mm): the slack span hangs in a sag instead of the taut span the "
+            f"models start from; {_what_fits(drive, params, lmin, lmax, longest=True)}"))]
+    if lmin - M * p > play:
+        short = lmin - M * p
+        return [Problem("chain_too_short", (
+            f"the chain is too short: drive.links = {M} is {1e3 * short:.4g} mm shorter than "
+            f"its wrapping length at centre distance {1e3 * drive.centre_distance:.6g} mm "
+            f"({lmin / p:.3f} pitches at least over a tooth period, seed 004 eq 13), more than "
+            f"its joints' play ({M} x chain.joint_clearance = {1e3 * play:.3g} mm): every link "
+            f"is stretched at rest; {_what_fits(drive, params, lmin, lmax, longest=False)}"))]
+    return []
+
+
+@lru_cache(maxsize=64)
+def _wrap_range(drive: Drive) -> tuple[float, float, float]:
+    from .kinematics.wrapping import wrap_length_range
+    return wrap_length_range(drive)
+
+
+def _what_fits(drive: Drive, params: Mapping[str, Any], lmin: float, lmax: float,
+               longest: bool) -> str:
+    """What to change: the link count nearest to the chain's that fits this centre distance
+    within its play (L_min / (p + c) <= M <= L_max / (p - c), and no shorter than Drive takes),
+    and the centre distance at which the chain's own links wrap tightly."""
+    p, c = drive.pitch, float(params.get("chain.joint_clearance", 0.0))
+    lo = max(math.ceil(lmin / (p + c) - 1e-9), math.ceil(lmin * (1.0 - 2e-3) / p - 1e-9), 4)
+    hi = math.floor(lmax / (p - c) + 1e-9) if c < p else lo
+    links = (f"use drive.links = {hi if longest else lo}" if lo <= hi else
+             "no whole number of links fits this centre distance within the play")
+    try:
+        tight = Drive.from_links(drive.n_driver, drive.n_driven, p, drive.links)
+    except ValueError:  # pragma: no cover - only for chains that cannot wrap at all
+        return links
+    return (f"{links}{', or' if lo <= hi else '; use'} drive.centre_distance = "
+            f"{tight.centre_distance:.6g} m (0: the distance at which {drive.links} links wrap "
+            f"tightly)")
+
+
+# --- thresholds -----------------------------------------------------------------------------------
+
+def breaking_load(drive: Drive, params: Mapping[str, Any]) -> tuple[float, str] | None:
+    """(breaking load [N], where it comes from), or None if neither parameter
+    ``chain.breaking_load`` nor an ISO 606 chain of this pitch gives one."""
+    given = params.get("chain.breaking_load")
+    if given is not None and float(given) > 0:
+        return float(given), f"chain.breaking_load = {float(given) / 1e3:.4g} kN"
+    from .presets import ISO606
+    sizes = [c for c in ISO606.values() if abs(c.pitch - drive.pitch) <= _PITCH_MATCH * c.pitch]
+    if not sizes:
+        return None
+    d1 = 2.0 * float(params.get("chain.roller_radius", 0.0))
+    same_roller = [c for c in sizes if abs(c.roller_diameter - d1) <= _ROLLER_MATCH]
+    sizes = same_roller or sizes
+    chain = min(sizes, key=lambda c: c.tensile_strength)
+    names = "/".join(c.name for c in sizes)
+    which = (f"ISO 606 {chain.name}" if len(sizes) == 1 else
+             f"ISO 606 {chain.name} (the lower of {names}, which match this pitch"
+             + (" and roller)" if same_roller else ")"))
+    return chain.tensile_strength, (f"{which}: minimum tensile strength "
+                                    f"{chain.tensile_strength / 1e3:.4g} kN")
+
+
+def seat_clearance_limit(params: Mapping[str, Any]) -> float:
+    """Largest roller-seat clearance [m]: ISO 606's for the roller, r_i,max - d1/2 =
+    0.005 d1 + 0.069 d1^(1/3) (mm), or the model's R_t - R_r if larger."""
+    d1_mm = 2e3 * params["chain.roller_radius"]
+    iso = (0.005 * d1_mm + 0.069 * d1_mm ** (1.0 / 3.0)) * 1e-3
+    return max(iso, params["contact.seat_radius"] - params["chain.roller_radius"])
+
+
+# --- the outputs' statistics, from whole arrays or sample by sample -------------------------------
+
+@dataclass
+class _Stats:
+    """What the output checks need, accumulated over the samples seen."""
+    max_contact: float = 0.0
+    t_contact: float = math.nan
+    max_link: float = 0.0
+    t_link: float = math.nan
+    min_link: float = 0.0
+    t_min_link: float = math.nan
+    reversal: float = 0.0          # most negative driven speed along the input's direction
+    t_reversal: float = math.nan
+    reversed_samples: int = 0
+    driven_samples: int = 0
+    drift: float = 0.0             # transmission error at a whole tooth period minus at start
+    t_drift: float = math.nan
+    periods: int = 0               # whole driver tooth periods reached
+    last_k: int = 0
+    last_drift: float = 0.0
+
+
+class Monitor:
+    """The output checks of one run, fed sample by sample (the FMU: :meth:`update` after each
+    communication step returns the sentences of problems found for the first time) or all at
+    once (:func:`output_problems`). ``names``: the order of the outputs in a row."""
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any], level: int,
+                 names: Sequence[str] | None = None):
+        self.drive, self.params, self.level = drive, dict(params), int(level)
+        self.period = 2.0 * math.pi / drive.n_driver
+        self.stats = _Stats()
+        self._start = None          # (driver angle, transmission error) at the first sample
+        self._last = None           # (driver angle, transmission error, time) of the last one
+        self._reported: set[str] = set()
+        self._index = ({n: names.index(n) for n in OUTPUTS} if names is not None
+                       and all(n in names for n in OUTPUTS) else None)
+        self._ix = tuple(self._index[n] for n in OUTPUTS) if self._index else ()
+        self._k = 0                 # whole tooth periods of the driver at the last sample
+        self._alarm = (False, False, 0.0)
+        # below these no output check can fire: update() then skips problems() (FMU steps)
+        bl = breaking_load(drive, self.params)
+        self._force_alarm = math.inf if bl is None else bl[0]
+        if self.level == 3:
+            self._force_alarm = min(self._force_alarm, self.params["contact.stiffness"]
+                                    * seat_clearance_limit(self.params))
+        self._half_tooth = math.pi / drive.n_driven
+
+    # -- sample by sample --------------------------------------------------------------------
+    def update(self, t: float, row, input_speed: float) -> list[str]:
+        """Take one sample (``row`` indexed as ``names``) and return the sentences of the
+        problems that appear with it (each problem once per run)."""
+        if self._index is None:
+            return []
+        a, b, c, d, e, f = self._ix
+        self._sample(float(t), float(row[a]), float(row[b]), float(row[c]), float(row[d]),
+                     float(row[e]), float(row[f]), float(input_speed))
+        s = self.stats
+        force = max(s.max_contact, s.max_link, -s.min_link)
+        alarm = (s.reversed_samples > 0, abs(s.drift) > self._half_tooth,
+                 force if force > self._force_alarm else 0.0)
+        if alarm == self._alarm:        # nothing that could raise a new problem has changed
+            return []
+        self._alarm = alarm
+        new = []
+        for p in self.problems():
+            if p.code not in self._reported:
+                self._reported.add(p.code)
+                new.append(p.text)
+        return new
+
+    def _sample(self, t, phi1, w2, te, fc, tmax, tmin, w_in):
+        s = self.stats
+        if fc > s.max_contact:
+            s.max_contact, s.t_contact = fc, t
+        if tmax > s.max_link:
+            s.max_link, s.t_link = tmax, t
+        if tmin < s.min_link:
+            s.min_link, s.t_min_link = tmin, t
+        if self._start is None:
+            self._start = (phi1, te)
+        phi0, te0 = self._start
+        if abs(w_in) >= REVERSAL_SPEED and abs(phi1 - phi0) >= self.period:
+            s.driven_samples += 1
+            along = w2 if w_in > 0 else -w2
+            if along < -REVERSAL_SPEED:
+                s.reversed_samples += 1
+                if math.isnan(s.t_reversal):
+                    s.t_reversal = t
+                s.reversal = min(s.reversal, along)
+        k = math.floor((phi1 - phi0) / self.period)
+        if k != self._k and self._last is not None:
+            self._crossings(self._last[0], self._last[1], phi1, te, t)
+        self._k = k
+        self._last = (phi1, te, t)
+
+    def _crossings(self, a0, e0, a1, e1, t):
+        """Transmission error at each whole tooth period the driver passed from a0 to a1."""
+        phi0, te0 = self._start
+        P = self.period
+        k0 = math.floor((a0 - phi0) / P)
+        k1 = math.floor((a1 - phi0) / P)
+        if k0 == k1:
+            return
+        lo, hi = (k0 + 1, k1) if k1 > k0 else (k1 + 1, k0)
+        s = self.stats
+        for k in range(lo, hi + 1):
+            target = phi0 + k * P
+            f = (target - a0) / (a1 - a0)
+            drift = e0 + f * (e1 - e0) - te0
+            if abs(drift) > abs(s.drift):
+                s.drift, s.t_drift = drift, t
+            if k != 0 and abs(k) >= s.periods:
+                s.periods, s.last_k, s.last_drift = abs(k), k, drift
+
+    # -- whole arrays --------------------------------------------------------------------------
+    def update_arrays(self, time, outputs: Mapping[str, np.ndarray], input_speed) -> None:
+        """Take a whole run (arrays by output name) at once; the same statistics as feeding
+        :meth:`_sample` every sample, vectorised."""
+        t = np.asarray(time, float)
+        phi1 = np.asarray(outputs["driver.angle"], float)
+        w2 = np.asarray(outputs["driven.speed"], float)
+        te = np.asarray(outputs["transmission_error"], float)
+        w_in = np.broadcast_to(np.asarray(input_speed, float), t.shape)
+        s = self.stats
+        if not len(t):
+            return
+        fc = np.asarray(outputs["contact.max_force"], float)
+        tmax = np.asarray(outputs["chain.max_link_tension"], float)
+        tmin = np.asarray(outputs["chain.min_link_tension"], float)
+        i, j, m = int(np.argmax(fc)), int(np.argmax(tmax)), int(np.argmin(tmin))
+        if fc[i] > s.max_contact:
+            s.max_contact, s.t_contact = float(fc[i]), float(t[i])
+        if tmax[j] > s.max_link:
+            s.max_link, s.t_link = float(tmax[j]), float(t[j])
+        if tmin[m] < s.min_link:
+            s.min_link, s.t_min_link = float(tmin[m]), float(t[m])
+        if self._start is None:
+            self._start = (float(phi1[0]), float(te[0]))
+        phi0, te0 = self._start
+        driven = (np.abs(w_in) >= REVERSAL_SPEED) & (np.abs(phi1 - phi0) >= self.period)
+        along = np.where(w_in > 0, w2, -w2)
+        rev = driven & (along < -REVERSAL_SPEED)
+        s.driven_samples += int(driven.sum())
+        s.reversed_samples += int(rev.sum())
+        if rev.any():
+            if math.isnan(s.t_reversal):
+                s.t_reversal = float(t[np.argmax(rev)])
+            s.reversal = min(s.reversal, float(np.min(along[rev])))
+        k = np.floor((phi1 - phi0) / self.period)
+        if self._last is not None:
+            self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
+                            float(t[0]))
+        for i in np.flatnonzero(np.diff(k) != 0):
+            self._crossings(float(phi1[i]), float(te[i]), float(phi1[i + 1]), float(te[i + 1]),
+                            float(t[i + 1]))
+        self._last = (float(phi1[-1]), float(te[-1]), float(t[-1]))
+        self._k = int(k[-1])
+
+    # -- the findings ----------------------------------------------------------------------------
+    def problems(self) -> list[Problem]:
+        """Problems found in the samples so far (geometry not included: :func:`problems`)."""
+        s, d, p = self.stats, self.drive, self.params
+        out: list[Problem] = []
+        bl = breaking_load(d, p)
+        if bl is not None:
+            limit, source = bl
+            worst = max((s.max_contact, "contact force", s.t_contact),
+                        (s.max_link, "link tension", s.t_link),
+                        (-s.min_link, "link compression", s.t_min_link), key=lambda c: c[0])
+            if worst[0] > limit:
+                out.append(Problem("breaking_load", (
+                    f"the {worst[1]} reaches {worst[0] / 1e3:.4g} kN at t = {worst[2]:.4g} s, "
+                    f"above the chain's breaking load ({source}): such a chain would break, "
+                    f"and the model holds to small strain only; use a lower load or speed, more "
+                    f"static tension on a slack chain, more teeth on the small sprocket or a "
+                    f"larger chain")))
+        if self.level == 3:
+            kc = p["contact.stiffness"]
+            pen = s.max_contact / kc
+            rr = p["chain.roller_radius"]
+            allowed = seat_clearance_limit(p)
+            law = (f"penalty contact F = k_c delta + c_c delta', contact.stiffness k_c = "
+                   f"{kc / 1e6:.4g} kN/mm")
+            if pen > rr:
+                out.append(Problem("penetration_roller", (
+                    f"a roller penetrates its seat by {1e3 * pen:.3g} mm at t = "
+                    f"{s.t_contact:.4g} s (contact.max_force {s.max_contact / 1e3:.4g} kN / "
+                    f"{law}), more than the roller radius {1e3 * rr:.3g} mm: the roller "
+                    f"centre is inside the tooth and the contact geometry means nothing; use a "
+                    f"lower speed or load, more teeth, a stiffer contact or a lower level"),
+                    invalid=True))
+            elif pen > allowed:
+                out.append(Problem("penetration", (
+                    f"a roller penetrates its seat by {1e3 * pen:.3g} mm at t = "
+                    f"{s.t_contact:.4g} s (contact.max_force {s.max_contact / 1e3:.4g} kN / "
+                    f"{law}), more than the largest ISO 606 seat clearance for this roller "
+                    f"({1e3 * allowed:.3g} mm): the penalty contact is far outside its range; "
+                    f"use a lower speed or load, more teeth on the small sprocket, a taut chain "
+                    f"or a larger chain")))
+        if self.level >= 1:
+            half = math.pi / d.n_driven
+            if abs(s.drift) > half:
+                ratio = (d.tooth_ratio + s.last_drift / (s.last_k * self.period)
+                         if s.last_k else math.nan)
+                teeth = s.drift / (2 * math.pi / d.n_driven)
+                out.append(Problem("teeth_skipped", (
+                    f"teeth skipped: by t = {s.t_drift:.4g} s the driven sprocket is "
+                    f"{teeth:+.3g} driven teeth off the chain (more than half a tooth, pi / z2 = "
+                    f"{half:.4g} rad, at a whole driver tooth period); the mean speed ratio over "
+                    f"{s.periods} whole driver tooth periods is {ratio:.6g} against the exact "
+                    f"tooth ratio {d.n_driver}/{d.n_driven} = {d.tooth_ratio:.6g}: the chain "
+                    f"jumps teeth and the result is not a working drive; use more teeth on the "
+                    f"small sprocket, a taut chain (more static tension or fewer links), a "
+                    f"lower speed or load, or a larger chain"), invalid=True))
+            if s.reversed_samples:
+                frac = s.reversed_samples / max(s.driven_samples, 1)
+                out.append(Problem("driven_reversal", (
+                    f"the driven sprocket turns backwards under forward drive: "
+                    f"{abs(s.reversal):.4g} rad/s against the input's direction (first at t = "
+                    f"{s.t_reversal:.4g} s, {100 * frac:.3g} % of the samples once the driver "
+                    f"has turned a tooth): a torsional vibration larger than the mean speed "
+                    f"(resonance) or a slack chain, and the means mix both directions; use "
+                    f"another speed (away from the resonance), more static tension or damping, "
+                    f"or fewer links")))
+        return out
+
+
+def output_problems(drive: Drive, params: Mapping[str, Any], level: int, time,
+                    outputs: Mapping[str, np.ndarray], input_speed) -> list[Problem]:
+    """The output checks (breaking load; at level 3 penetration; at levels 1-3 teeth skipped
+    and driven-speed reversal) over a whole run. ``input_speed``: the input-shaft speed at
+    each sample (or one number)."""
+    if any(n not in outputs for n in OUTPUTS):
+        return []
+    mon = Monitor(drive, params, level)
+    mon.update_arrays(time, outputs, input_speed)
+    return mon.problems()
+
+
+def problems(drive: Drive, params: Mapping[str, Any], level: int, time=None,
+             outputs: Mapping[str, np.ndarray] | None = None, input_speed=None) -> list[Problem]:
+    """Geometry checks, then the output checks if ``outputs`` are given."""
+    found = geometry_problems(drive, params)
+    if outputs is not None:
+        found += output_problems(drive, params, level, time, outputs, input_speed)
+    return found
+
+
+def result_problems(result) -> list[Problem]:
+    """:func:`problems` of a ``simulation.Result`` (its scene's drive, parameters, level and
+    input speed)."""
+    sc = result.scene
+    speed = sc.input_arrays(result.time)[1]
+    outputs = {n: result[n] for n in OUTPUTS if n in result}
+    return problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed)
