@@ -64,10 +64,11 @@ def test_coarse_trade_study_scene_warns_at_level_3(coarse):
     assert {"breaking_load", "penetration"} <= found
     # the thresholds, from ISO 606 and seed 003's contact stiffness typed here
     peak = float(np.max(coarse["contact.max_force"]))
-    assert peak > ISO_10A
+    assert peak > ISO_10B
     assert peak / K_CONTACT > SEAT_CLEARANCE_MAX_10B
     text = " ".join(coarse.warnings)
-    assert "breaking load" in text and "10A" in text and "21.8 kN" in text
+    # the scene's chain is 10B (seed 003), whose breaking load the parameter carries
+    assert "breaking load" in text and "chain.breaking_load" in text and "22.2 kN" in text
     assert "a larger chain" in text          # says what to change
     # a warning, not a refusal: the result stays valid
     assert coarse.valid
@@ -173,7 +174,8 @@ def test_every_preset_scene_has_a_chain_that_fits():
 
 def test_breaking_load_from_the_parameter_or_iso_606():
     sc = load_scene("xu2010")
-    params = dict(sc.parameters)
+    assert breaking_load(sc.drive, sc.parameters)[0] == ISO_10B    # its chain's, the parameter
+    params = {k: v for k, v in sc.parameters.items() if k != "chain.breaking_load"}
     value, source = breaking_load(sc.drive, params)
     assert value == ISO_10A and "10A" in source and "10B" in source   # both match; the lower
     value, source = breaking_load(sc.drive, dict(params, **{"chain.breaking_load": 3e4}))
@@ -239,10 +241,10 @@ def test_reversal_counts_once_the_driver_has_turned_a_tooth():
 
 def test_force_thresholds():
     t, out = _signals()
-    out["chain.max_link_tension"] = np.full_like(t, 1.01 * ISO_10A)
+    out["chain.max_link_tension"] = np.full_like(t, 1.01 * ISO_10B)
     assert _check((t, out)) == {"breaking_load"}
     t, out = _signals()
-    out["chain.min_link_tension"] = np.full_like(t, -1.01 * ISO_10A)    # compression
+    out["chain.min_link_tension"] = np.full_like(t, -1.01 * ISO_10B)    # compression (xu2010: chain.breaking_load, 10B)
     assert _check((t, out)) == {"breaking_load"}
     t, out = _signals()
     out["contact.max_force"] = np.full_like(t, 1.01 * K_CONTACT * SEAT_CLEARANCE_MAX_10B)
