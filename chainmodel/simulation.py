@@ -161,7 +161,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     model = scene.model()
     scene.check_operating_point(model)
     times = scene.times()
-    if model.n_states == 0 and hasattr(model, "evaluate") and not snapshot_every:
+    if model.n_states == 0 and model.vectorised and not snapshot_every:
         # stateless level: every sample at once (vectorised over time)
         wall = _time.perf_counter()
         data = model.evaluate(*scene.input_arrays(times))

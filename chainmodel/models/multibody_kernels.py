@@ -18,7 +18,13 @@ import math
 
 import numpy as np
 
-from .._numba import njit, numba_requested
+from .._numba import ENABLED, enabled, njit
+from .outputs import OUTPUT_NAMES  # noqa: F401  (re-exported: MultibodyModel reads it here)
+from .outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
+                      O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
+                      O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
+                      O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
+                      O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 
 __all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
            "PARAM_FIELDS", "N_PARAMS"]
@@ -47,17 +53,14 @@ def pack_tables(P: np.ndarray) -> np.ndarray:
     return np.concatenate([P[:N_PARAMS], np.cos(2 * np.pi * j1 / z1), np.sin(2 * np.pi * j1 / z1),
                            np.cos(2 * np.pi * j2 / z2), np.sin(2 * np.pi * j2 / z2)])
 
-try:  # pragma: no cover - depends on the environment
-    import numba as _numba
-    HAVE_NUMBA = True
-except Exception:  # pragma: no cover
-    _numba = None
-    HAVE_NUMBA = False
+#: the one numba switch (chainmodel._numba.ENABLED), under its old name
+HAVE_NUMBA = ENABLED
 
 
 def numba_enabled() -> bool:
-    """True when the numba kernels are available and not disabled by CHAINMODEL_NUMBA=0."""
-    return HAVE_NUMBA and numba_requested()
+    """chainmodel._numba.enabled(): the compiled kernels exist and CHAINMODEL_NUMBA does not
+    switch them off."""
+    return enabled()
 
 
 # --- explicit-loop kernel (compiled by numba) -------------------------------------------------
@@ -495,11 +498,6 @@ def spans_numpy(q, dist, side, seat_angle, tol, P, mids, out):
                      fwd[np.argmax(ef)] if ef.any() else mid)
 
 
-OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
-                "driven.acceleration", "input_shaft.torque", "tight_span.tension",
-                "slack_span.tension", "tight_span.length", "velocity_ratio", "transmission_error",
-                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force",
-                "chain.min_link_tension")
 
 
 def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
@@ -557,21 +555,21 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
             tmin = tension[i]
         if fcon[i] > fmax:
             fmax = fcon[i]
-    out[0] = phi1
-    out[1] = w1
-    out[2] = q[1]
-    out[3] = v[1]
-    out[4] = acc[1]
-    out[5] = shaft
-    out[6] = tension[spans[t_span, 0]]
-    out[7] = tension[spans[s_span, 0]]
-    out[8] = length
-    out[9] = v[1] / w1 if w1 != 0.0 else 0.0
-    out[10] = q[1] - tooth_ratio * phi1
-    out[11] = deflection
-    out[12] = tmax
-    out[13] = fmax
-    out[14] = tmin
+    out[O_DRIVER_ANGLE] = phi1
+    out[O_DRIVER_SPEED] = w1
+    out[O_DRIVEN_ANGLE] = q[1]
+    out[O_DRIVEN_SPEED] = v[1]
+    out[O_DRIVEN_ACCELERATION] = acc[1]
+    out[O_INPUT_SHAFT_TORQUE] = shaft
+    out[O_TIGHT_SPAN_TENSION] = tension[spans[t_span, 0]]
+    out[O_SLACK_SPAN_TENSION] = tension[spans[s_span, 0]]
+    out[O_TIGHT_SPAN_LENGTH] = length
+    out[O_VELOCITY_RATIO] = v[1] / w1 if w1 != 0.0 else 0.0
+    out[O_TRANSMISSION_ERROR] = q[1] - tooth_ratio * phi1
+    out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = deflection
+    out[O_CHAIN_MAX_LINK_TENSION] = tmax
+    out[O_CONTACT_MAX_FORCE] = fmax
+    out[O_CHAIN_MIN_LINK_TENSION] = tmin
     return status
 
 
