@@ -32,8 +32,10 @@ one and committed on success).
 
 Levels 1-3 run the fixed-step loops compiled (numba), a communication step with its outputs in
 one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
-for many points, ``simulate()``'s path); ``FixedStepper.compiled = False`` or
-``CHAINMODEL_NUMBA=0`` selects the Python loops here, which implement the same rule.
+for many points, ``simulate()``'s path); ``CHAINMODEL_NUMBA=0`` (the one switch,
+:mod:`chainmodel._numba`) or ``FixedStepper.compiled = False`` selects the Python loops here,
+which implement the same rule. Everything asked of a model is declared in
+:class:`~chainmodel.models.base.Model` (docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -416,8 +418,10 @@ class FixedStepper(Stepper):
                 f"frequency {omega / (2 * math.pi):.6g} Hz); use a step <= {limit:.6g} s or 0 "
                 "for automatic")
 
-    #: let a model that offers compiled loops (``advance_held`` / ``advance_points``, e.g.
-    #: levels 1-3 with numba) do the stepping; False forces the Python loops
+    #: let a model that offers compiled loops (``advance_held`` / ``advance_points``, levels
+    #: 1-3 when :meth:`Model.has_compiled_loop`, i.e. the one numba switch chainmodel._numba
+    #: is on) do the stepping; False forces the Python loops in this process (how the tests
+    #: and benchmarks/reduced.py run the plain twin beside the compiled one)
     compiled: bool = True
 
     def _has_compiled(self) -> bool:

@@ -150,15 +150,18 @@ def _run_batched(scene, model, stepper, times, data, bar) -> bool:
 
 
 def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
-              batched: bool = True) -> Result:
+              batched: bool = True, model=None) -> Result:
     """Run ``scene`` with its stepper over its duration, sampling every output at each
     communication point; ``snapshot_every=k`` keeps the model's snapshot every k samples.
 
     ``batched``: where the stepper and model offer it (levels 1-3 with their compiled loops),
     run many communication points in one compiled call, outputs included - the same numbers as
     the per-point loop (``batched=False``, one ``Stepper.advance`` per point as the FMU steps),
-    without its Python overhead per point."""
-    model = scene.model()
+    without its Python overhead per point.
+
+    ``model``: the scene's model when the caller has built it already (simulate() with
+    fidelity="auto": the choice built it to check the level); else it is built here."""
+    model = scene.model() if model is None else model
     scene.check_operating_point(model)
     times = scene.times()
     if model.n_states == 0 and model.vectorised and not snapshot_every:
@@ -225,6 +228,7 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
         from .fidelity_auto import choose
         choice = choose(sc, outputs, accuracy)
         sc = sc.with_overrides(**choice.overrides)
-    result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+    result = run_scene(sc, progress=progress, snapshot_every=snapshot_every,
+                       model=None if choice is None else choice.model)
     result.auto_choice = choice
     return result
