@@ -9,11 +9,13 @@ benchmarks/multibody.py does) the script times, interleaved, best of --repeat:
 
 * "simulate()": the whole library call, 1 s of the scene at outputs every 1e-4 s (the default;
   ramp 0.05 s to 120 rpm, then steady running), after a warm-up;
-* "numba loop": the compiled Verlet loop alone (multibody_kernels.run_fixed_numba: two force
-  evaluations per step, the library's scheme), the same number of steps at the same mean step,
-  from the library's state at 0.5 s, constant input speed;
-* "C, 2 / step": the C loop with the library's scheme, the same steps from the same state (it
-  checks itself: after 2000 steps its state equals the numba loop's to round-off);
+* "numba loop": the compiled Verlet loop alone (multibody_kernels.run_fixed_numba: the numbers
+  of two force evaluations per step - at each step's start and at its end with the half-step
+  velocity - made of one position pass and two velocity passes), the same number of steps at
+  the same mean step, from the library's state at 0.5 s, constant input speed;
+* "C, 2 / step": the C loop computing the same numbers with two full evaluations per step, the
+  same steps from the same state (it checks itself: after 2000 steps its state equals the numba
+  loop's to round-off);
 * "C floor, 1 / step": the C loop reusing the step-end evaluation as the next step's start
   (issue 20's floor: one force evaluation per step).
 
@@ -145,7 +147,7 @@ def main(argv=None) -> int:
     print(f"load average after: {la[0]:.2f} {la[1]:.2f} {la[2]:.2f}; input speed "
           f"{sc.operating.speed / RPM:g} rpm, 1 s simulated, outputs every 1e-4 s\n")
     print("| links | steps / s | evaluations (simulate) | simulate() [s] | x real time | "
-          "numba loop, 2 evaluations / step [s] | C, 2 / step [s] | C floor, 1 / step [s] | "
+          "numba loop [s] | C, 2 full evaluations / step [s] | C floor, 1 / step [s] | "
           "simulate / C floor | numba loop / C (same scheme) | C vs numba state after 2000 "
           "steps | C per evaluation [us] |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")

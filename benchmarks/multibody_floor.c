@@ -151,10 +151,10 @@ static int accel(int n, const double *q, const double *v, double tau, double tau
 }
 
 /* nsteps velocity-Verlet steps of h from (t0, x) (x = [q, v], 2 n entries), in place; the
- * input shaft at angle w_in t, speed w_in. evals_per_step 2: the library's scheme (each step
+ * input shaft at angle w_in t, speed w_in. evals_per_step 2: the library's numbers (each step
  * starts with an evaluation at its own (q, v), and ends with one at the new positions and the
- * half-step velocity); 1: the floor of issue 20 (the end evaluation also starts the next
- * step). Returns -1, or the step after which the state diverged. */
+ * half-step velocity; the library gets them from one position pass and two velocity passes);
+ * 1: the floor of issue 20 (the end evaluation also starts the next step). Returns -1, or the step after which the state diverged. */
 long verlet(int n, double *x, double t0, double h, long nsteps, double w_in, double load,
             const double *P, int evals_per_step)
 {

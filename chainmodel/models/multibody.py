@@ -97,7 +97,8 @@ class MultibodyModel(Model):
     level = 3
     name = "multibody"
     second_order = True
-    #: the compiled velocity-Verlet loop: one force evaluation pair per step at 90 % of the
+    #: the compiled velocity-Verlet loop: the numbers of one force evaluation pair per step
+    #: (made of one pass over the positions and two over the velocities) at 90 % of the
     #: stable step (docs/multibody.md, benchmark in docs/performance.md)
     preferred_method = "verlet"
 
