@@ -30,11 +30,13 @@ checks the state after each communication step: a diverging integration raises
 last communication point (no state copy is made for that: the new state is built beside the old
 one and committed on success).
 
-Levels 1-3 run the fixed-step loops compiled (numba), a communication step with its outputs in
+Levels 1-3 run the fixed-step loops of their kernels, a communication step with its outputs in
 one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
-for many points, ``simulate()``'s path); ``CHAINMODEL_NUMBA=0`` (the one switch,
-:mod:`chainmodel._numba`) or ``FixedStepper.compiled = False`` selects the Python loops here,
-which implement the same rule. Everything asked of a model is declared in
+for many points, ``simulate()``'s path): compiled with numba, and for levels 1-2 the same source
+as plain Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._numba`; level 3
+then runs the loops here on its numpy force law). The loops here implement the same rule on
+:meth:`Model.rhs`, for any model without kernels and, with ``FixedStepper.compiled = False``,
+as the twin the tests compare with. Everything asked of a model is declared in
 :class:`~chainmodel.models.base.Model` (docs/architecture.md).
 """
 
@@ -418,10 +420,11 @@ class FixedStepper(Stepper):
                 f"frequency {omega / (2 * math.pi):.6g} Hz); use a step <= {limit:.6g} s or 0 "
                 "for automatic")
 
-    #: let a model that offers compiled loops (``advance_held`` / ``advance_points``, levels
-    #: 1-3 when :meth:`Model.has_compiled_loop`, i.e. the one numba switch chainmodel._numba
-    #: is on) do the stepping; False forces the Python loops in this process (how the tests
-    #: and benchmarks/reduced.py run the plain twin beside the compiled one)
+    #: let a model whose kernels hold the loop (``advance_held`` / ``advance_points``,
+    #: :meth:`Model.has_loop_kernel`: levels 1-2 always - compiled with numba, their plain
+    #: source without - and level 3 with numba) do the stepping; False forces the loops here
+    #: on Model.rhs in this process (how the tests and benchmarks/reduced.py run that twin
+    #: beside the kernels' loop)
     compiled: bool = True
 
     def _has_compiled(self) -> bool:
@@ -430,7 +433,7 @@ class FixedStepper(Stepper):
             model = self.model
             can = self._can_compile = (model.n_states > 0
                                        and self.method in model.compiled_methods
-                                       and model.has_compiled_loop(self.method))
+                                       and model.has_loop_kernel(self.method))
         return self.compiled and can
 
     # --- compiled paths ---------------------------------------------------------------------

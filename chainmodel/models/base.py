@@ -131,8 +131,8 @@ class Model(ABC):
     preferred_method: ClassVar[str] = "rk45"
     #: names of the entries of :meth:`switching_functions`, for messages (empty: by index)
     switching_names: ClassVar[tuple[str, ...]] = ()
-    #: fixed-step methods for which :meth:`advance_points` / :meth:`advance_held` run a
-    #: compiled loop (when :meth:`has_compiled_loop` also says so)
+    #: fixed-step methods for which :meth:`advance_points` / :meth:`advance_held` run the
+    #: loop in the model's kernels (when :meth:`has_loop_kernel` also says so)
     compiled_methods: ClassVar[tuple[str, ...]] = ()
     #: False where ``solver.tolerance`` does not set the automatic step (level 3: its step is
     #: the stability bound; docs/numerics.md)
@@ -217,10 +217,11 @@ class Model(ABC):
         solver.method and what to use instead), or None when it is accepted."""
         return None
 
-    def has_compiled_loop(self, method: str) -> bool:
+    def has_loop_kernel(self, method: str) -> bool:
         """True when :meth:`advance_points` / :meth:`advance_held` run the fixed-step loop of
-        ``method`` compiled (numba on and ``method`` in :attr:`compiled_methods`); the steppers
-        otherwise run the loop on :meth:`rhs` in Python."""
+        ``method`` in the model's kernels (``method`` in :attr:`compiled_methods`; compiled
+        when the numba switch is on, their plain source otherwise); the steppers otherwise run
+        their own loop on :meth:`rhs` (chainmodel.integrate.FixedStepper)."""
         return False
 
     def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque,
@@ -229,13 +230,13 @@ class Model(ABC):
         compiled call (step rule ``cfg``, outputs into ``out`` rows 1.., states into
         ``states``; x_in untouched, the final state in x_out). Returns (reached, status, steps,
         events, evaluations, logged, t_status, omega); only called when
-        :meth:`has_compiled_loop` is True."""
+        :meth:`has_loop_kernel` is True."""
         raise NotImplementedError(f"the {self.name} model has no compiled {method} loop")
 
     def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque,
                      cfg, out, log):
         """:meth:`advance_points` over one communication step with the inputs held first-order
-        (the FMU's hold), outputs at t1 in out[1]; only called when :meth:`has_compiled_loop`
+        (the FMU's hold), outputs at t1 in out[1]; only called when :meth:`has_loop_kernel`
         is True."""
         raise NotImplementedError(f"the {self.name} model has no compiled {method} loop")
 
