@@ -21,7 +21,7 @@ from .presets import preset, preset_names
 from .scene import Scene, load_scene
 from .simulation import Result, simulate
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 
 def sweep(study, out=None, **kw):

@@ -2,7 +2,11 @@
 
 numba is a core dependency. Every compiled kernel has a plain numpy/Python twin that computes
 the same thing (tests compare them); ``CHAINMODEL_NUMBA=0`` (or false/no/off) in the
-environment selects the plain paths even where numba is installed.
+environment selects the plain paths even where numba is installed. That is the one switch:
+:data:`ENABLED` is its value when the kernels were decorated (at import: compiled or plain),
+:func:`enabled` its value now (the models ask it before dispatching to a compiled loop, so a
+process that switches it off after import runs the plain loops); ``spans.NUMBA`` and
+``multibody_kernels.HAVE_NUMBA`` / ``numba_enabled()`` are their old names.
 
 Kernels are compiled with :func:`njit` (never ``numba.njit(cache=True)``): it attaches the
 per-machine cache of :mod:`chainmodel.numba_cache`, which survives the FMU's fresh extraction
@@ -13,7 +17,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba", "njit"]
+__all__ = ["numba_requested", "import_numba", "njit", "jit", "ENABLED", "enabled"]
 
 
 def numba_requested() -> bool:
@@ -32,9 +36,29 @@ def import_numba():
     return numba
 
 
+#: the switch at import: numba importable and not switched off by CHAINMODEL_NUMBA (the
+#: kernels below are compiled when it is True)
+ENABLED: bool = import_numba() is not None
+
+
+def enabled() -> bool:
+    """The switch now: the kernels are compiled (:data:`ENABLED`) and CHAINMODEL_NUMBA does
+    not switch them off."""
+    return ENABLED and numba_requested()
+
+
 def njit(fn=None, **options):
     """Compile ``fn`` with numba in nopython mode, cached once per machine
     (:func:`chainmodel.numba_cache.cached_njit`). Needs numba importable; callers keep their
     plain twin for ``CHAINMODEL_NUMBA=0``."""
     from .numba_cache import cached_njit
     return cached_njit(fn, **options)
+
+
+def jit(fn):
+    """The kernel decorator: compiled (:func:`njit`) when :data:`ENABLED`, else the function
+    itself; either way the plain function is at ``.py_func`` (the twin tests call)."""
+    if ENABLED:
+        return njit(fn, fastmath=False)
+    fn.py_func = fn
+    return fn

@@ -33,6 +33,7 @@ import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
+from typing import Any
 
 from .models import ALL_OUTPUTS
 from .parameters import FIDELITY_NAMES
@@ -136,6 +137,10 @@ class AutoChoice:
     met: bool                     # the table says the target is met
     accuracy: float
     notes: list = field(default_factory=list)
+    #: the model :func:`choose` built to check that the chosen level accepts the scene (its
+    #: scene differs from the chosen one only in solver settings, which no model reads):
+    #: simulate() runs it instead of building it again
+    model: Any = field(default=None, repr=False, compare=False)
 
     @property
     def message(self) -> str:
@@ -181,13 +186,16 @@ def validate_request(outputs, accuracy) -> tuple[tuple[str, ...], float]:
     return outputs, acc
 
 
-def _accepts(scene, level: int) -> bool:
+def _level_model(scene, level: int):
+    """The model of ``scene`` at ``level`` if that level accepts the scene's operating point,
+    else None."""
     try:
         sc = scene.with_overrides(fidelity=level)
-        sc.check_operating_point(sc.model())
+        model = sc.model()
+        sc.check_operating_point(model)
     except ValueError:
-        return False
-    return True
+        return None
+    return model
 
 
 def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
@@ -205,7 +213,8 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
         notes.append("level >= 2 forced: the midspan deflection is zero below it")
     figs = tuple(dict.fromkeys(f for o in outputs
                                for f in (OUTPUT_FIGURES.get(o, ()) if o not in FIGURES else (o,))))
-    here = _log_groups(scene_features(scene))
+    features = scene_features(scene)
+    here = _log_groups(features)
     by_scene: dict[str, list] = {}
     for r in rows:
         by_scene.setdefault(r["scene"], []).append(r)
@@ -214,7 +223,7 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
         there = _log_groups(rs[0])
         dist[name] = math.sqrt(sum((a - b) ** 2 for a, b in zip(here, there)))
     source = min(dist, key=dist.get)
-    f_here = scene_features(scene)["mesh_over_mode"]
+    f_here = features["mesh_over_mode"]
     span = [r["mesh_over_mode"] for r in rows]
     extrapolated = dist[source] > EXTRAPOLATION_DISTANCE or not (
         0.5 * min(span) <= f_here <= 2.0 * max(span))
@@ -226,22 +235,35 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
 
     cands = [r for r in by_scene[source] if r["status"] == "ok" and r["level"] >= min_level
              and (not figs or all(r[f"err_{f}"] is not None for f in figs))]
-    accepted = {lv: _accepts(scene, lv) for lv in {r["level"] for r in cands}}
-    cands = [r for r in cands if accepted[r["level"]]]
-    if not cands:
+
+    # the cheapest row meeting the accuracy, else the most accurate (then cheapest), among the
+    # rows whose level accepts the scene: levels are checked (a model built) in that order,
+    # only until one accepts
+    def rank(r):
+        e = error(r)
+        return (0, r["wall_per_sim_s"], 0.0) if e <= accuracy else (1, e, r["wall_per_sim_s"])
+
+    built: dict = {}
+    best = None
+    for r in sorted(cands, key=rank):
+        if r["level"] not in built:
+            built[r["level"]] = _level_model(scene, r["level"])
+        if built[r["level"]] is not None:
+            best = r
+            break
+    if best is None:
         raise ValueError(f"fidelity='auto' found no configuration of level >= {min_level} "
                          f"measured on '{source}' that this scene accepts")
-    meeting = [r for r in cands if error(r) <= accuracy]
-    met = bool(meeting)
-    best = (min(meeting, key=lambda r: r["wall_per_sim_s"]) if met
-            else min(cands, key=lambda r: (error(r), r["wall_per_sim_s"])))
-    choice = AutoChoice(best["level"], _overrides(scene, best), best["config"], error(best),
-                        figs, source, dist[source], extrapolated, met, accuracy, notes)
+    met = error(best) <= accuracy
+    model = built[best["level"]]
+    choice = AutoChoice(best["level"], _overrides(scene, best, model), best["config"],
+                        error(best), figs, source, dist[source], extrapolated, met, accuracy,
+                        notes, model)
     log.info(choice.message)
     return choice
 
 
-def _overrides(scene, row) -> dict:
+def _overrides(scene, row, model=None) -> dict:
     lv = row["level"]
     out = {"fidelity": lv}
     if lv == 0:
@@ -255,7 +277,7 @@ def _overrides(scene, row) -> dict:
             out["solver_step"] = 0.0          # level 3's own step
         else:
             sc = scene.with_overrides(fidelity=lv, solver_method=row["method"], solver_step=0.0)
-            out["solver_step"] = float(sc.stepper().h) * frac
+            out["solver_step"] = float(sc.stepper(model).h) * frac
     return out
 
 

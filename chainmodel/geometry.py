@@ -18,56 +18,17 @@ upper span, pulled by the driver) is the tight span.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field
+from functools import lru_cache
 
-__all__ = ["Sprocket", "Drive", "check_positive", "check_teeth", "check_fraction"]
-
-
-# --- input validation --------------------------------------------------------------------------
-
-def _is_real(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+__all__ = ["Sprocket", "Drive", "check_positive", "check_teeth", "check_fraction",
+           "centre_distance_for_links"]
 
 
-def check_positive(name: str, value, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as float, or raise ValueError naming ``name`` if it is not a finite
-    positive number (non-negative with ``allow_zero``)."""
-    if not _is_real(value) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    if value < 0 or (value == 0 and not allow_zero):
-        bound = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name} must be {bound}, got {value!r}")
-    return float(value)
+# --- input validation: chainmodel.checks (re-exported here) -------------------------------------
 
-
-def check_teeth(name: str, value) -> int:
-    """A sprocket needs a whole number of teeth, at least 3 (a polygon)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        if _is_real(value) and float(value).is_integer():
-            value = int(value)
-        else:
-            raise ValueError(f"{name} must be a whole number of teeth (at least 3), got {value!r}")
-    if value < 3:
-        raise ValueError(f"{name} needs at least 3 teeth, got {value}")
-    return int(value)
-
-
-def check_whole(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        if _is_real(value) and float(value).is_integer():
-            value = int(value)
-        else:
-            raise ValueError(f"{name} must be a whole number >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise ValueError(f"{name} must be a whole number >= {minimum}, got {value}")
-    return int(value)
-
-
-def check_fraction(name: str, value) -> float:
-    if not _is_real(value) or not math.isfinite(value) or not (0.0 <= value < 1.0):
-        raise ValueError(f"{name} must lie in [0, 1), got {value!r}")
-    return float(value)
+from .checks import (check_fraction, check_positive, check_teeth,  # noqa: E402,F401
+                     check_whole, split_tangent_length)
 
 
 # --- sprocket ----------------------------------------------------------------------------------
@@ -237,18 +198,46 @@ class Drive:
         ``tight_at="max"`` instead returns the distance at which the chain is nowhere stretched
         (just tight at the longest instant, slack elsewhere).
         """
-        from .kinematics.wrapping import centre_distance_for_links
         return centre_distance_for_links(n_driver, n_driven, pitch, links, name=name,
                                          tight_at=tight_at)
 
 
-def split_tangent_length(x_c: float, pitch: float) -> tuple[int, float]:
-    """N and f such that x_c = (N + 1 + f) p (seed 000 eq 5), robust to round-off at whole pitches."""
-    q = x_c / pitch - 1.0
-    span = math.floor(q + 1e-12)
-    frac = q - span
-    if frac < 0.0:
-        frac = 0.0
-    if frac >= 1.0:
-        span, frac = span + 1, 0.0
-    return int(span), float(frac)
+@lru_cache(maxsize=128)
+def centre_distance_for_links(n_driver: int, n_driven: int, pitch: float, links: int,
+                              name: str = "", tight_at: str = "min") -> Drive:
+    """The drive whose chain of ``links`` links wraps tightly (see :meth:`Drive.from_links`)."""
+    from scipy.optimize import brentq
+
+    from .kinematics.wrapping import wrap_length_range
+
+    n_driver = check_teeth("driver sprocket (n_driver)", n_driver)
+    n_driven = check_teeth("driven sprocket (n_driven)", n_driven)
+    pitch = check_positive("pitch", pitch)
+    links = check_whole("links (M)", links, 4)
+    if tight_at not in ("min", "max"):
+        raise ValueError(f"tight_at must be 'min' or 'max', got {tight_at!r}")
+    pick = 0 if tight_at == "min" else 2
+
+    def excess(x_over_p: float) -> float:
+        span, frac = split_tangent_length(x_over_p * pitch, pitch)
+        d = Drive(n_driver, n_driven, pitch, span, frac)
+        return wrap_length_range(d, samples=100)[pick] / pitch - links
+
+    # smallest tangent length with N >= 1 that keeps the pitch circles apart
+    rc = pitch / (2 * math.sin(math.pi / n_driver))
+    ro = pitch / (2 * math.sin(math.pi / n_driven))
+    yc = pitch / (2 * math.tan(math.pi / n_driven)) - pitch / (2 * math.tan(math.pi / n_driver))
+    x_lo = max(2.0, math.sqrt(max((rc + ro) ** 2 - yc**2, 0.0)) / pitch + 1e-6)
+    try:
+        lo_val = excess(x_lo)
+    except ValueError:
+        lo_val = math.nan
+    if not (lo_val < 0):
+        raise ValueError(
+            f"a chain of {links} links (drive.links) is too short to wrap sprockets of {n_driver} and "
+            f"{n_driven} teeth at any centre distance that keeps them apart; use more links")
+    # each extra pitch of tangent length adds about two pitches of wrapping length
+    x_hi = x_lo + max(links / 2.0, 2.0)
+    x = brentq(excess, x_lo, x_hi, xtol=1e-12, rtol=1e-14)
+    span, frac = split_tangent_length(x * pitch, pitch)
+    return Drive(n_driver, n_driven, pitch, span, frac, links, name)

@@ -30,10 +30,14 @@ checks the state after each communication step: a diverging integration raises
 last communication point (no state copy is made for that: the new state is built beside the old
 one and committed on success).
 
-Levels 1-3 run the fixed-step loops compiled (numba), a communication step with its outputs in
+Levels 1-3 run the fixed-step loops of their kernels, a communication step with its outputs in
 one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
-for many points, ``simulate()``'s path); ``FixedStepper.compiled = False`` or
-``CHAINMODEL_NUMBA=0`` selects the Python loops here, which implement the same rule.
+for many points, ``simulate()``'s path): compiled with numba, and for levels 1-2 the same source
+as plain Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._numba`; level 3
+then runs the loops here on its numpy force law). The loops here implement the same rule on
+:meth:`Model.rhs`, for any model without kernels and, with ``FixedStepper.compiled = False``,
+as the twin the tests compare with. Everything asked of a model is declared in
+:class:`~chainmodel.models.base.Model` (docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -47,7 +51,13 @@ from typing import Callable, ClassVar, Union
 
 import numpy as np
 
-from .models.base import ALL_OUTPUTS, Inputs, Model, SimulationDiverged
+from .models.base import Inputs, Model, SimulationDiverged
+# defined once, in the compiled loop of levels 1-2, and used by the Python loops here: the event
+# crossing's root tolerance and gap (relative to the step) and the loops' status codes (1
+# diverged, 2 explicit step above the stable limit, 3 the model's range left, 4 non-finite
+# outputs; multibody_kernels uses the same numbers)
+from .models.outputs import OUTPUT_NAMES
+from .models.rk4_loop import EVENT_GAP, EVENT_TOL, STATUS_OUTPUTS, STATUS_UNSTABLE
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
            "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",
@@ -55,16 +65,10 @@ __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState
 
 InputSource = Union[Inputs, Callable[[float], Inputs]]
 
-#: the outputs of ALL_OUTPUTS by position: the rows advance_held and advance_points fill
-OUTPUT_NAMES: tuple[str, ...] = tuple(o.name for o in ALL_OUTPUTS)
 #: default of solver.tolerance (chainmodel.parameters; docs/numerics.md)
 DEFAULT_TOLERANCE = 5e-4
 #: event times a compiled communication step keeps for the event log
 EVENTS_PER_STEP = 16
-#: status codes of the compiled loops (models/rk4_loop.py, multibody_kernels.py): 1 diverged,
-#: 2 explicit step above the stable limit, 3 the model's range left, 4 non-finite outputs
-STATUS_UNSTABLE = 2
-STATUS_OUTPUTS = 4
 
 
 @dataclass
@@ -297,11 +301,6 @@ class Stepper(ABC):
 
 # --- fixed step ------------------------------------------------------------------------------
 
-#: event crossing of the fixed-step methods (FixedStepper._cross; the compiled loop of levels 1-2
-#: uses the same values, models/rk4_loop.py): root tolerance on a dense output, and the gap eta
-#: between the steps on either side of an event, both relative to the step
-EVENT_TOL = 1e-5
-EVENT_GAP = 1e-4
 
 
 def _changed(g, g0) -> bool:
@@ -393,7 +392,7 @@ class FixedStepper(Stepper):
         #: the step rule for the compiled loops (rk4_loop.CF_*): explicit step, tolerance's
         #: h omega, safety times the stability limit, the limit, an outer bound
         theta = (accuracy_step(self.method, self.tolerance)
-                 if getattr(model, "tolerance_applies", True) else math.inf)
+                 if model.tolerance_applies else math.inf)
         self.cfg = np.array([self.fixed_step, theta, self.safety * self.limit, self.limit,
                              self.max_step])
         #: the step bound at the initial state and input speed (the step itself follows the
@@ -421,8 +420,11 @@ class FixedStepper(Stepper):
                 f"frequency {omega / (2 * math.pi):.6g} Hz); use a step <= {limit:.6g} s or 0 "
                 "for automatic")
 
-    #: let a model that offers compiled loops (``advance_held`` / ``advance_points``, e.g.
-    #: levels 1-3 with numba) do the stepping; False forces the Python loops
+    #: let a model whose kernels hold the loop (``advance_held`` / ``advance_points``,
+    #: :meth:`Model.has_loop_kernel`: levels 1-2 always - compiled with numba, their plain
+    #: source without - and level 3 with numba) do the stepping; False forces the loops here
+    #: on Model.rhs in this process (how the tests and benchmarks/reduced.py run that twin
+    #: beside the kernels' loop)
     compiled: bool = True
 
     def _has_compiled(self) -> bool:
@@ -430,8 +432,8 @@ class FixedStepper(Stepper):
         if can is None:     # what the model offers for this method (fixed once built)
             model = self.model
             can = self._can_compile = (model.n_states > 0
-                                       and self.method in getattr(model, "compiled_methods", ())
-                                       and model._compiled(self.method))
+                                       and self.method in model.compiled_methods
+                                       and model.has_loop_kernel(self.method))
         return self.compiled and can
 
     # --- compiled paths ---------------------------------------------------------------------
@@ -755,8 +757,7 @@ class Adaptive(Stepper):
         self.h_last = 0.0
 
     def _default_atol(self):
-        scale = getattr(self.model, "state_scale", None)
-        scale = scale() if callable(scale) else None
+        scale = self.model.state_scale()
         return 1e-9 if scale is None else self.rtol * np.asarray(scale, float)
 
     #: an event storm: this many events in a row, each within STORM_GAP x (t1 - t0) of the
@@ -809,7 +810,7 @@ class Adaptive(Stepper):
             if close >= self.STORM_EVENTS:
                 self.x = np.array(x, float)
                 fired = [i for i, e in enumerate(sol.t_events) if len(e)]
-                names = getattr(model, "switching_names", None)
+                names = model.switching_names
                 which = (", ".join(names[i] for i in fired) if names else
                          ", ".join(f"switching function {i}" for i in fired))
                 raise SimulationDiverged(
@@ -847,13 +848,12 @@ def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: In
                  step: float = 0.0, rtol: float = 1e-6, x0=None, max_step: float = math.inf,
                  tolerance: float = DEFAULT_TOLERANCE, **options) -> Stepper:
     """A stepper for ``model``. ``method="auto"`` lets the model choose
-    (its ``preferred_method`` attribute; rk45 otherwise). Fixed-step methods take ``step``
+    (:attr:`Model.preferred_method`, rk45 by default). Fixed-step methods take ``step``
     (0: automatic, from ``tolerance`` and the dynamics) and ``max_step`` (an outer bound on the
     automatic step); adaptive ones ``rtol``."""
     if method == "auto":
-        method = getattr(model, "preferred_method", "rk45")
-    refuse = getattr(model, "refuse_method", None)
-    reason = refuse(method) if refuse is not None else None
+        method = model.preferred_method
+    reason = model.refuse_method(method)
     if reason:
         raise ValueError(reason)
     if method == "rk4":

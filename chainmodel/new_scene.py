@@ -154,7 +154,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from .cli import CLIError
+    from .cli_support import CLIError
     out = Path(args.out) if args.out else None
     if out is not None and out.exists():
         raise CLIError(f"--out {out}: the file exists; give another name")
@@ -182,7 +182,7 @@ def run(args) -> int:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m chainmodel.new_scene", description=__doc__)
     _add_arguments(ap)
-    from .cli import CLIError
+    from .cli_support import CLIError
     try:
         return run(ap.parse_args(argv))
     except CLIError as exc:

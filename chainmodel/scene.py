@@ -45,7 +45,7 @@ from .presets import INCH, preset, preset_names, reference_values
 __all__ = ["Scene", "load_scene", "scene_names", "drive_from_parameters", "OperatingPoint",
            "SETTINGS", "setting_names"]
 
-RPM = 2 * math.pi / 60
+from .units import RPM  # noqa: E402  (one definition: chainmodel.units)
 
 #: the scene settings :meth:`Scene.with_overrides` takes besides the parameters
 SETTINGS = ("fidelity", "duration", "output_interval", "input_speed_rpm", "input_speed",

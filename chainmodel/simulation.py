@@ -167,7 +167,7 @@ def _run_batched(scene, model, stepper, times, data, bar) -> bool:
 
 
 def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
-              batched: bool = True) -> Result:
+              batched: bool = True, model=None) -> Result:
     """Run ``scene`` with its stepper over its duration, sampling every output at each
     communication point; ``snapshot_every=k`` keeps the model's snapshot every k samples.
 
@@ -176,13 +176,16 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     the per-point loop (``batched=False``, one ``Stepper.advance`` per point as the FMU steps),
     without its Python overhead per point.
 
+    ``model``: the scene's model when the caller has built it already (simulate() with
+    fidelity="auto": the choice built it to check the level); else it is built here.
+
     A run whose time series would not fit in memory is refused before anything is allocated
     (:class:`chainmodel.run_memory.RunTooLarge`, a ValueError with the estimate and what fits)."""
     check_run_memory(scene.duration, scene.output_interval, scene.fidelity)
-    model = scene.model()
+    model = scene.model() if model is None else model
     scene.check_operating_point(model)
     times = scene.times()
-    if model.n_states == 0 and hasattr(model, "evaluate") and not snapshot_every:
+    if model.n_states == 0 and model.vectorised and not snapshot_every:
         # stateless level: every sample at once (vectorised over time)
         wall = _time.perf_counter()
         data = model.evaluate(*scene.input_arrays(times))
@@ -247,7 +250,8 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
         choice = choose(sc, outputs, accuracy)
         sc = sc.with_overrides(**choice.overrides)
     try:
-        result = run_scene(sc, progress=progress, snapshot_every=snapshot_every)
+        result = run_scene(sc, progress=progress, snapshot_every=snapshot_every,
+                           model=None if choice is None else choice.model)
     except SimulationDiverged as exc:
         # a chain far too long or short for its centre distance makes level 3 diverge at once;
         # say so rather than leave the step blamed (chainmodel.validity)

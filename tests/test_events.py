@@ -7,13 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 import chainmodel
-from chainmodel import integrate, simulation
-from chainmodel.models import rk4_loop as S
-
-
-def test_compiled_and_python_crossings_use_the_same_constants():
-    assert S.EVENT_TOL == integrate.EVENT_TOL
-    assert S.EVENT_GAP == integrate.EVENT_GAP
+from chainmodel import simulation
 
 
 def test_rk4_across_seating_release_and_slack_events_converges_to_dop853():

@@ -41,7 +41,7 @@ __all__ = ["ACCURACY", "SCENARIOS", "Profile", "ScenarioSpec", "ReferenceError",
            "OutputCheck", "make_references", "read_reference", "read_references", "check",
            "record", "write_reference", "INPUT_NAMES", "OUTPUT_NAMES"]
 
-RPM = 2.0 * math.pi / 60.0
+from ..units import RPM  # noqa: E402  (one definition: chainmodel.units)
 INPUT_NAMES = ("input_shaft.angle", "input_shaft.speed", "load.torque")
 
 #: tube half-height (fraction of each output's range over the scenario) per fidelity level,

@@ -477,9 +477,15 @@ def run_cli(args) -> int:
 
 def fmu_section() -> str:
     """The FMU's cost per communication step on xu2010 at 1e-4 and 1e-3 s, measured by
-    benchmarks/fmu_cost.py (which must be importable: run from the repository root)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-    import fmu_cost  # noqa: PLC0415 - a benchmark script, not part of the package
+    benchmarks/fmu_cost.py of the repository checkout (loaded from its file, not from sys.path:
+    a benchmark script, not part of the package)."""
+    import importlib.util
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "fmu_cost.py"
+    spec = importlib.util.spec_from_file_location("fmu_cost", script)
+    if spec is None or not script.is_file():
+        raise ValueError(f"--fmu needs the benchmark script {script} (a repository checkout)")
+    fmu_cost = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fmu_cost)
     lines = ["\n### FMU path (xu2010, 120 rpm; benchmarks/fmu_cost.py)\n",
              "| level | step 1e-4 s: us per step | step 1e-3 s: us per step |", "|---|---|---|"]
     res = {h: fmu_cost.fmu_step_cost(steps=100, repeats=5, h=h) for h in (1e-4, 1e-3)}

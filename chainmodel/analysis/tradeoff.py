@@ -133,7 +133,7 @@ def register(subparsers) -> None:
 
 
 def _run_bench(args) -> int:
-    from ..cli import print_json
+    from ..cli_support import print_json
     if args.scene == "tradeoff":    # `chainmodel bench tradeoff`: the study of many scenes
         from .trade_study import run_cli
         return run_cli(args)

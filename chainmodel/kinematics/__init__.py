@@ -5,8 +5,8 @@ from .approx import (approximate, approximate_phase, approximate_release, approx
                      exact_phase, nrmsd)
 from .fourbar import Configuration, Kinematics, exact, release, seating
 from .rotation import Rotation, driven_rotation
-from .wrapping import (centre_distance_for_links, chain_geometry, roller_positions, wrap_length,
-                       wrap_length_range)
+from ..geometry import centre_distance_for_links
+from .wrapping import chain_geometry, roller_positions, wrap_length, wrap_length_range
 
 __all__ = ["Configuration", "Kinematics", "exact", "release", "seating", "Rotation",
            "driven_rotation", "chain_geometry", "roller_positions", "wrap_length",

@@ -23,7 +23,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..geometry import Drive
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:       # annotations only: geometry imports the wrapping, which imports this
+    from ..geometry import Drive
 
 __all__ = ["Configuration", "FourBar", "fourbar", "seating", "release", "exact", "Kinematics",
            "solve_trig"]

@@ -27,7 +27,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..geometry import Drive
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:       # annotations only: geometry imports the wrapping, which imports this
+    from ..geometry import Drive
 from . import fourbar as fb
 
 __all__ = ["Rotation", "driven_rotation", "driver_contact_angle", "reverse_offset"]

@@ -38,15 +38,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..geometry import Drive, check_positive, check_teeth, check_whole, split_tangent_length
+from ..checks import check_whole
 from . import fourbar as fb
 from .rotation import driven_rotation
 
+if TYPE_CHECKING:       # annotations only: geometry imports this module (Drive checks its links)
+    from ..geometry import Drive
+
 __all__ = ["SpanGeometry", "ChainGeometry", "chain_geometry", "wrap_length", "wrap_length_range",
-           "centre_distance_for_links", "roller_positions", "tooth_period_samples",
+           "roller_positions", "tooth_period_samples",
            "tooth_period_geometry"]
 
 _EDGE = 1e-9  # rad: an endpoint exactly at an event belongs to the state after the event
@@ -257,45 +261,6 @@ def wrap_length_range(drive: Drive, samples: int = 200) -> tuple[float, float, f
     lmax, _ = _min_over_period(lambda v: -wrap_length(drive, driver_angle=v), period, samples)
     mean = float(np.mean(wrap_length(drive, driver_angle=tooth_period_samples(drive, samples))))
     return lmin, mean, -lmax
-
-
-@lru_cache(maxsize=128)
-def centre_distance_for_links(n_driver: int, n_driven: int, pitch: float, links: int,
-                              name: str = "", tight_at: str = "min") -> Drive:
-    """The drive whose chain of ``links`` links wraps tightly (see :meth:`Drive.from_links`)."""
-    from scipy.optimize import brentq
-
-    n_driver = check_teeth("driver sprocket (n_driver)", n_driver)
-    n_driven = check_teeth("driven sprocket (n_driven)", n_driven)
-    pitch = check_positive("pitch", pitch)
-    links = check_whole("links (M)", links, 4)
-    if tight_at not in ("min", "max"):
-        raise ValueError(f"tight_at must be 'min' or 'max', got {tight_at!r}")
-    pick = 0 if tight_at == "min" else 2
-
-    def excess(x_over_p: float) -> float:
-        span, frac = split_tangent_length(x_over_p * pitch, pitch)
-        d = Drive(n_driver, n_driven, pitch, span, frac)
-        return wrap_length_range(d, samples=100)[pick] / pitch - links
-
-    # smallest tangent length with N >= 1 that keeps the pitch circles apart
-    rc = pitch / (2 * math.sin(math.pi / n_driver))
-    ro = pitch / (2 * math.sin(math.pi / n_driven))
-    yc = pitch / (2 * math.tan(math.pi / n_driven)) - pitch / (2 * math.tan(math.pi / n_driver))
-    x_lo = max(2.0, math.sqrt(max((rc + ro) ** 2 - yc**2, 0.0)) / pitch + 1e-6)
-    try:
-        lo_val = excess(x_lo)
-    except ValueError:
-        lo_val = math.nan
-    if not (lo_val < 0):
-        raise ValueError(
-            f"a chain of {links} links (drive.links) is too short to wrap sprockets of {n_driver} and "
-            f"{n_driven} teeth at any centre distance that keeps them apart; use more links")
-    # each extra pitch of tangent length adds about two pitches of wrapping length
-    x_hi = x_lo + max(links / 2.0, 2.0)
-    x = brentq(excess, x_lo, x_hi, xtol=1e-12, rtol=1e-14)
-    span, frac = split_tangent_length(x * pitch, pitch)
-    return Drive(n_driver, n_driven, pitch, span, frac, links, name)
 
 
 def roller_positions(drive: Drive, driver_angle: float, driven_angle: float) -> np.ndarray:

@@ -58,45 +58,8 @@ class Inputs:
         return self
 
 
-@dataclass(frozen=True)
-class OutputSpec:
-    name: str
-    unit: str
-    description: str
-
-
-CORE_OUTPUTS: tuple[OutputSpec, ...] = (
-    OutputSpec("driver.angle", "rad", "driver sprocket rotation, forward positive"),
-    OutputSpec("driver.speed", "rad/s", "driver sprocket angular speed"),
-    OutputSpec("driven.angle", "rad", "driven sprocket rotation, forward positive"),
-    OutputSpec("driven.speed", "rad/s", "driven sprocket angular speed"),
-    OutputSpec("driven.acceleration", "rad/s2", "driven sprocket angular acceleration"),
-    OutputSpec("input_shaft.torque", "N.m",
-               "torque the drive takes from the input shaft (feed back to the motor)"),
-    OutputSpec("tight_span.tension", "N",
-               "tension of the tight span, the one carrying the larger tension (with a load that "
-               "resists the motion the span the driver pulls; with an overrunning load the one "
-               "the driven sprocket pulls), centrifugal tension included"),
-    OutputSpec("slack_span.tension", "N", "tension of the other (slack) span, centrifugal "
-               "tension included"),
-    OutputSpec("tight_span.length", "m", "distance between the tight span's endpoint rollers"),
-    OutputSpec("velocity_ratio", "", "driven speed / driver speed (instantaneous)"),
-    OutputSpec("transmission_error", "rad",
-               "driven angle minus the mean-ratio angle (n_driver / n_driven) * driver angle"),
-)
-
-EXTRA_OUTPUTS: tuple[OutputSpec, ...] = (
-    OutputSpec("tight_span.midspan_deflection", "m",
-               "transverse deflection of the tight span at its middle, from the straight line "
-               "between its endpoints (positive away from the line of centres)"),
-    OutputSpec("chain.max_link_tension", "N", "largest link tension in the chain"),
-    OutputSpec("contact.max_force", "N", "largest roller-tooth contact force"),
-    OutputSpec("chain.min_link_tension", "N",
-               "smallest link tension in the chain (0: a link is slack; negative: its plates "
-               "bear in compression)"),
-)
-
-ALL_OUTPUTS: tuple[OutputSpec, ...] = CORE_OUTPUTS + EXTRA_OUTPUTS
+# the outputs of DESIGN.md: chainmodel.models.outputs (re-exported here)
+from .outputs import ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, OutputSpec  # noqa: E402
 
 QUASI_STATIC = "quasi-static estimate at this fidelity level: "
 
@@ -144,7 +107,7 @@ def check_pretension(drive: Drive, params: Mapping[str, Any]) -> None:
     (:func:`chainmodel.models.kinematic.pretension_error`; one definition of pretension)."""
     if "chain.pretension" not in params:
         return
-    from .kinematic import pretension_error
+    from .static_tension import pretension_error
     why = pretension_error(drive, params)
     if why is not None:
         raise ValueError(why)
@@ -161,6 +124,19 @@ class Model(ABC):
     name: ClassVar[str]
     #: state layout [q, v] with dq/dt = v for the first half (enables symplectic steppers)
     second_order: ClassVar[bool] = False
+
+    # --- the stepper contract: everything chainmodel.integrate asks of a model is declared
+    # here with its default (no attribute probing in the steppers) ----------------------------
+    #: the stepper ``solver.method = auto`` picks (make_stepper)
+    preferred_method: ClassVar[str] = "rk45"
+    #: names of the entries of :meth:`switching_functions`, for messages (empty: by index)
+    switching_names: ClassVar[tuple[str, ...]] = ()
+    #: fixed-step methods for which :meth:`advance_points` / :meth:`advance_held` run the
+    #: loop in the model's kernels (when :meth:`has_loop_kernel` also says so)
+    compiled_methods: ClassVar[tuple[str, ...]] = ()
+    #: False where ``solver.tolerance`` does not set the automatic step (level 3: its step is
+    #: the stability bound; docs/numerics.md)
+    tolerance_applies: ClassVar[bool] = True
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
         if drive.links is None:
@@ -221,6 +197,48 @@ class Model(ABC):
     def jacobian_sparsity(self):
         """Sparsity pattern of d(rhs)/dx for implicit steppers (None: dense)."""
         return None
+
+    #: True where :meth:`evaluate` gives every output at many samples at once (the stateless
+    #: level 0; simulate() then skips the stepper)
+    vectorised: ClassVar[bool] = False
+
+    def evaluate(self, angle, speed, acceleration, torque) -> dict[str, np.ndarray]:
+        """Every output at many input samples at once (arrays), for a :attr:`vectorised`
+        model."""
+        raise NotImplementedError(f"the {self.name} model has no vectorised evaluation")
+
+    def state_scale(self) -> np.ndarray | None:
+        """Typical magnitude of each state entry (the adaptive steppers' atol = rtol * scale);
+        None: no scale (atol 1e-9)."""
+        return None
+
+    def refuse_method(self, method: str) -> str | None:
+        """Why the stepper ``method`` is refused for this model (one sentence naming
+        solver.method and what to use instead), or None when it is accepted."""
+        return None
+
+    def has_loop_kernel(self, method: str) -> bool:
+        """True when :meth:`advance_points` / :meth:`advance_held` run the fixed-step loop of
+        ``method`` in the model's kernels (``method`` in :attr:`compiled_methods`; compiled
+        when the numba switch is on, their plain source otherwise); the steppers otherwise run
+        their own loop on :meth:`rhs` (chainmodel.integrate.FixedStepper)."""
+        return False
+
+    def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque,
+                       cfg, out, states, log, log_cap):
+        """The fixed-step loop of ``method`` through the communication points ``times`` in one
+        compiled call (step rule ``cfg``, outputs into ``out`` rows 1.., states into
+        ``states``; x_in untouched, the final state in x_out). Returns (reached, status, steps,
+        events, evaluations, logged, t_status, omega); only called when
+        :meth:`has_loop_kernel` is True."""
+        raise NotImplementedError(f"the {self.name} model has no compiled {method} loop")
+
+    def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque,
+                     cfg, out, log):
+        """:meth:`advance_points` over one communication step with the inputs held first-order
+        (the FMU's hold), outputs at t1 in out[1]; only called when :meth:`has_loop_kernel`
+        is True."""
+        raise NotImplementedError(f"the {self.name} model has no compiled {method} loop")
 
     def check(self, t: float, x: np.ndarray) -> None:
         """Raise SimulationDiverged if the state is not physical. Default: finite check."""

@@ -37,7 +37,7 @@ STRAIN_LIMIT = 0.05
 ANGLE_LIMIT = 1e9
 #: meshing frequency / lowest neglected natural frequency at the edge of a level's validity
 QUASI_STATIC_RATIO = 0.5
-RPM = 2 * math.pi / 60
+from ..units import RPM  # noqa: E402  (one definition: chainmodel.units)
 
 
 def meshing_frequency(drive: Drive, speed: float) -> float:

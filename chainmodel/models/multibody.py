@@ -97,7 +97,8 @@ class MultibodyModel(Model):
     level = 3
     name = "multibody"
     second_order = True
-    #: the compiled velocity-Verlet loop: one force evaluation pair per step at 90 % of the
+    #: the compiled velocity-Verlet loop: the numbers of one force evaluation pair per step
+    #: (made of one pass over the positions and two over the velocities) at 90 % of the
     #: stable step (docs/multibody.md, benchmark in docs/performance.md)
     preferred_method = "verlet"
 
@@ -288,7 +289,9 @@ class MultibodyModel(Model):
     #: outputs are converged well below it (docs/numerics.md, level 3)
     tolerance_applies = False
 
-    def _compiled(self, method) -> bool:
+    def has_loop_kernel(self, method: str) -> bool:
+        """The compiled loops only: without numba the steppers' own loop on the vectorised
+        numpy force law is far faster than the kernels' loops run as plain Python."""
         return self.use_numba and method in self.compiled_methods
 
     def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
@@ -298,7 +301,7 @@ class MultibodyModel(Model):
         the outputs at every point (multibody_kernels._advance_points_loops); None without
         numba. Inputs inside a communication step: a cubic Hermite through its ends' angle and
         speed (exact for held inputs and the scene ramps)."""
-        if not self._compiled(method):
+        if not self.has_loop_kernel(method):
             return None
         res = K.advance_points_numba(0 if method == "verlet" else 1, x_in, x_out, times, angle,
                                      speed, acceleration, torque, self.P, self._omega_constants,
@@ -313,7 +316,7 @@ class MultibodyModel(Model):
                      out, log):
         """:meth:`advance_points` over one communication step with the inputs held first-order
         (the FMU's hold), outputs at t1 in out[1]; None without numba."""
-        if not self._compiled(method):
+        if not self.has_loop_kernel(method):
             return None
         res = K.advance_held_numba(0 if method == "verlet" else 1, x_in, x_out, t0, t1, angle,
                                    speed, acceleration, torque, self.P, self._omega_constants,

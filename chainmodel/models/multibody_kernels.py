@@ -18,7 +18,13 @@ import math
 
 import numpy as np
 
-from .._numba import njit, numba_requested
+from .._numba import ENABLED, enabled, njit
+from .outputs import OUTPUT_NAMES  # noqa: F401  (re-exported: MultibodyModel reads it here)
+from .outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
+                      O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
+                      O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
+                      O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
+                      O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 
 __all__ = ["HAVE_NUMBA", "numba_enabled", "accel_numpy", "accel_numba", "run_fixed_numba",
            "PARAM_FIELDS", "N_PARAMS"]
@@ -47,20 +53,27 @@ def pack_tables(P: np.ndarray) -> np.ndarray:
     return np.concatenate([P[:N_PARAMS], np.cos(2 * np.pi * j1 / z1), np.sin(2 * np.pi * j1 / z1),
                            np.cos(2 * np.pi * j2 / z2), np.sin(2 * np.pi * j2 / z2)])
 
-try:  # pragma: no cover - depends on the environment
-    import numba as _numba
-    HAVE_NUMBA = True
-except Exception:  # pragma: no cover
-    _numba = None
-    HAVE_NUMBA = False
+#: the one numba switch (chainmodel._numba.ENABLED), under its old name
+HAVE_NUMBA = ENABLED
 
 
 def numba_enabled() -> bool:
-    """True when the numba kernels are available and not disabled by CHAINMODEL_NUMBA=0."""
-    return HAVE_NUMBA and numba_requested()
+    """chainmodel._numba.enabled(): the compiled kernels exist and CHAINMODEL_NUMBA does not
+    switch them off."""
+    return enabled()
 
 
 # --- explicit-loop kernel (compiled by numba) -------------------------------------------------
+
+#: rows of the scratch vector ``scr`` (each M long): the links' angular speed, then what the
+#: positions give and the velocities reuse (:func:`_geometry_loops`): per link its direction,
+#: chord, length, spring force, damping coefficient and branch (1 stretched, -1 bearing, 0 in
+#: the play); per roller and sprocket the seat penetration (<= 0: no contact), contact normal,
+#: position relative to the sprocket centre and seat direction
+(R_OMEGA, R_EX, R_EY, R_DX, R_DY, R_L, R_TS, R_CL, R_BRANCH) = range(9)
+R_CONTACT = 9           # + 7 s + (0 pen, 1 nx, 2 ny, 3 rx, 4 ry, 5 st, 6 ct), s = 0 driver, 1 driven
+SCR_ROWS = R_CONTACT + 14
+
 
 def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist, seat_angle,
                  scr):
@@ -72,39 +85,42 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
     fcon[i]: normal contact force on roller i; side[i]: 0 free, 1 driver, 2 driven.
     dist[s, i]: distance of roller i from the nearest seat centre of sprocket s.
     seat_angle[s, i]: angle of that seat about the sprocket centre.
-    scr[i]: scratch (the angular velocity of link i).
+    scr: scratch, SCR_ROWS rows of M (the angular velocity of link i in its first row).
+
+    Two passes: :func:`_geometry_loops` (everything the positions give: link lengths and
+    directions, spring forces, seat search and penetrations) and :func:`_forces_loops` (the
+    forces with the velocities), the same arithmetic in the same order as one pass; the Verlet
+    loop runs the second pass again at a step's end velocity without the first.
     """
+    status = _GEOM(q, tau, P, dist, seat_angle, scr)
+    return _FORCES(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, seat_angle, scr,
+                   status)
+
+
+def _geometry_loops(q, tau, P, dist, seat_angle, scr):
+    """The position-dependent part of :func:`_accel_loops` into ``scr`` (rows R_*), ``dist``
+    and ``seat_angle``; returns 1 if a link is outside [l_min, l_max], else 0."""
     n = q.shape[0]
     M = (n - 2) // 2
-    m = P[I_M]
     k = P[I_K]
     c = P[I_C]
     l0 = P[I_L0]
-    kc = P[I_KC]
-    cc = P[I_CC]
     dR = P[I_DR]
     paper_contact = P[I_PAPER_CONTACT] != 0.0
-    paper_damp = P[I_PAPER_DAMP] != 0.0
     rigid = P[I_RIGID] != 0.0
     lmin = P[I_LMIN]
     lmax = P[I_LMAX]
     if rigid:
         phi1 = tau
-        w1 = tau_d
     else:
         phi1 = q[0]
-        w1 = v[0]
     phi2 = q[1]
-    w2 = v[1]
     status = 0
-    for i in range(2, n):
-        a[i] = 0.0
     # links (tension-only with the joints' free play, docs/multibody.md "Links carry no
     # compression"): U = k/2 e^2 for e = |d| - l0 > 0, 0 over the pin-bushing play
-    # -gap <= e <= 0, k/2 (e + gap)^2 beyond it (plates bearing); S = c/2 (e . dv)^2 (axial)
-    # or c/2 |dv|^2 (paper) while the spring is engaged, the damping rising from 0 over the
-    # first ``onset`` of engagement (Hunt-Crossley: no force jump when a link snaps taut);
-    # a damper does not push a taut link nor pull a bearing one
+    # -gap <= e <= 0, k/2 (e + gap)^2 beyond it (plates bearing); the damping rises from 0
+    # over the first ``onset`` of engagement (Hunt-Crossley: no force jump when a link snaps
+    # taut)
     gap = P[I_GAP]
     onset = P[I_ONSET]
     for i in range(M):
@@ -118,66 +134,28 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
             status = 1
             if not L > 0.0:
                 L = 1e-300
-        ex = dx / L
-        ey = dy / L
-        dvx = v[2 + 2 * j] - v[2 + 2 * i]
-        dvy = v[3 + 2 * j] - v[3 + 2 * i]
-        rate = ex * dvx + ey * dvy
         e = L - l0
         if e > 0.0:
             Ts = k * e
             cl = c if e >= onset else c * e / onset
-            T = Ts + cl * rate
-            if T < 0.0:
-                T = 0.0
+            branch = 1.0
         elif e < -gap:
             Ts = k * (e + gap)
             cl = c if -gap - e >= onset else c * (-gap - e) / onset
-            T = Ts + cl * rate
-            if T > 0.0:
-                T = 0.0
+            branch = -1.0
         else:
             Ts = 0.0
-            T = 0.0
             cl = 0.0
-        if paper_damp:
-            fx = Ts * ex + cl * dvx
-            fy = Ts * ey + cl * dvy
-            tension[i] = Ts + cl * rate
-        else:
-            fx = T * ex
-            fy = T * ey
-            tension[i] = T
-        a[2 + 2 * i] += fx
-        a[3 + 2 * i] += fy
-        a[2 + 2 * j] -= fx
-        a[3 + 2 * j] -= fy
-        scr[i] = (dx * dvy - dy * dvx) / (L * L)
-    # joint dampers: S = cj/2 sum (w_i - w_{i-1})^2 over the joints, w_i link i's angular speed
-    cj = P[I_CJ]
-    if cj > 0.0:
-        for i in range(M):
-            j = i + 1
-            if j == M:
-                j = 0
-            im = i - 1
-            if im < 0:
-                im = M - 1
-            Tj = cj * (2.0 * scr[i] - scr[im] - scr[j])
-            dx = q[2 + 2 * j] - q[2 + 2 * i]
-            dy = q[3 + 2 * j] - q[3 + 2 * i]
-            L2 = dx * dx + dy * dy
-            if not L2 > 0.0:
-                L2 = 1e-300
-            fx = -Tj * dy / L2
-            fy = Tj * dx / L2
-            a[2 + 2 * i] += fx
-            a[3 + 2 * i] += fy
-            a[2 + 2 * j] -= fx
-            a[3 + 2 * j] -= fy
+            branch = 0.0
+        scr[R_EX * M + i] = dx / L
+        scr[R_EY * M + i] = dy / L
+        scr[R_DX * M + i] = dx
+        scr[R_DY * M + i] = dy
+        scr[R_L * M + i] = L
+        scr[R_TS * M + i] = Ts
+        scr[R_CL * M + i] = cl
+        scr[R_BRANCH * M + i] = branch
     # roller-seat contact (eqs 5-10 with the seat/flank profile, see module docstring)
-    torque1 = 0.0
-    torque2 = 0.0
     z1 = int(P[I_Z1])
     z2 = int(P[I_Z2])
     ph1 = P[I_PH1] - phi1
@@ -189,11 +167,8 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
     for i in range(M):
         x = q[2 + 2 * i]
         y = q[3 + 2 * i]
-        vx = v[2 + 2 * i]
-        vy = v[3 + 2 * i]
-        side[i] = 0
-        fcon[i] = 0.0
         for s in range(2):
+            row = (R_CONTACT + 7 * s) * M + i
             if s == 0:
                 cx = P[I_CX]
                 cy = P[I_CY]
@@ -202,7 +177,6 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
                 cph = cph1
                 sph = sph1
                 ta = P[I_TA1]
-                w = w1
                 tip = P[I_TIP1]
                 sg = P[I_SG1]
                 cg = P[I_CG1]
@@ -217,7 +191,6 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
                 cph = cph2
                 sph = sph2
                 ta = P[I_TA2]
-                w = w2
                 tip = P[I_TIP2]
                 sg = P[I_SG2]
                 cg = P[I_CG2]
@@ -230,6 +203,7 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
                 # beyond the tooth tips: no seat can touch this roller
                 dist[s, i] = math.inf
                 seat_angle[s, i] = 0.0
+                scr[row] = -1.0
                 continue
             jj = math.floor((math.atan2(ry, rx) - ph) / ta + 0.5)
             th = ph + ta * jj
@@ -262,9 +236,123 @@ def _accel_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, dist
                         pen = abs(tl) * sg - sl * cg - dR
                         nx = -sgn * sg * st - cg * ct
                         ny = sgn * sg * ct - cg * st
+            scr[row] = pen
+            scr[row + M] = nx
+            scr[row + 2 * M] = ny
+            scr[row + 3 * M] = rx
+            scr[row + 4 * M] = ry
+            scr[row + 5 * M] = st
+            scr[row + 6 * M] = ct
+    return status
+
+
+def _forces_loops(q, v, tau, tau_d, tau_dd, load, P, a, tension, fcon, side, seat_angle, scr,
+                  status):
+    """The forces of :func:`_accel_loops` at the velocities ``v``, from the positions' part
+    that :func:`_geometry_loops` left in ``scr``; ``status`` its status. Returns (status,
+    shaft torque)."""
+    n = q.shape[0]
+    M = (n - 2) // 2
+    m = P[I_M]
+    kc = P[I_KC]
+    cc = P[I_CC]
+    paper_damp = P[I_PAPER_DAMP] != 0.0
+    rigid = P[I_RIGID] != 0.0
+    if rigid:
+        w1 = tau_d
+    else:
+        w1 = v[0]
+    w2 = v[1]
+    for i in range(2, n):
+        a[i] = 0.0
+    # link dampers: S = c/2 (e . dv)^2 (axial) or c/2 |dv|^2 (paper) while the spring is
+    # engaged; a damper does not push a taut link nor pull a bearing one
+    for i in range(M):
+        j = i + 1
+        if j == M:
+            j = 0
+        ex = scr[R_EX * M + i]
+        ey = scr[R_EY * M + i]
+        dx = scr[R_DX * M + i]
+        dy = scr[R_DY * M + i]
+        L = scr[R_L * M + i]
+        Ts = scr[R_TS * M + i]
+        cl = scr[R_CL * M + i]
+        branch = scr[R_BRANCH * M + i]
+        dvx = v[2 + 2 * j] - v[2 + 2 * i]
+        dvy = v[3 + 2 * j] - v[3 + 2 * i]
+        rate = ex * dvx + ey * dvy
+        if branch > 0.0:
+            T = Ts + cl * rate
+            if T < 0.0:
+                T = 0.0
+        elif branch < 0.0:
+            T = Ts + cl * rate
+            if T > 0.0:
+                T = 0.0
+        else:
+            T = 0.0
+        if paper_damp:
+            fx = Ts * ex + cl * dvx
+            fy = Ts * ey + cl * dvy
+            tension[i] = Ts + cl * rate
+        else:
+            fx = T * ex
+            fy = T * ey
+            tension[i] = T
+        a[2 + 2 * i] += fx
+        a[3 + 2 * i] += fy
+        a[2 + 2 * j] -= fx
+        a[3 + 2 * j] -= fy
+        scr[R_OMEGA * M + i] = (dx * dvy - dy * dvx) / (L * L)
+    # joint dampers: S = cj/2 sum (w_i - w_{i-1})^2 over the joints, w_i link i's angular speed
+    cj = P[I_CJ]
+    if cj > 0.0:
+        for i in range(M):
+            j = i + 1
+            if j == M:
+                j = 0
+            im = i - 1
+            if im < 0:
+                im = M - 1
+            Tj = cj * (2.0 * scr[i] - scr[im] - scr[j])
+            dx = q[2 + 2 * j] - q[2 + 2 * i]
+            dy = q[3 + 2 * j] - q[3 + 2 * i]
+            L2 = dx * dx + dy * dy
+            if not L2 > 0.0:
+                L2 = 1e-300
+            fx = -Tj * dy / L2
+            fy = Tj * dx / L2
+            a[2 + 2 * i] += fx
+            a[3 + 2 * i] += fy
+            a[2 + 2 * j] -= fx
+            a[3 + 2 * j] -= fy
+    # roller-seat contact forces
+    torque1 = 0.0
+    torque2 = 0.0
+    for i in range(M):
+        vx = v[2 + 2 * i]
+        vy = v[3 + 2 * i]
+        side[i] = 0
+        fcon[i] = 0.0
+        for s in range(2):
+            row = (R_CONTACT + 7 * s) * M + i
+            pen = scr[row]
             if pen > 0.0:
+                if s == 0:
+                    R = P[I_R1]
+                    w = w1
+                else:
+                    R = P[I_R2]
+                    w = w2
+                nx = scr[row + M]
+                ny = scr[row + 2 * M]
+                rx = scr[row + 3 * M]
+                ry = scr[row + 4 * M]
                 cross = rx * ny - ry * nx
                 if paper_damp:
+                    st = scr[row + 5 * M]
+                    ct = scr[row + 6 * M]
                     Fn = kc * pen
                     dvx = w * R * st - vx
                     dvy = -w * R * ct - vy
@@ -342,10 +430,17 @@ def _hermite(t, T0, H, a0, w0, a1, w1):
 
 
 def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
-                     acc, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle, scr):
+                     acc, acc2, k1, k2, k3, k4, xt, tension, fcon, side, dist, seat_angle, scr,
+                     started):
     """Advance x in place by ``nsteps`` fixed steps of ``method`` (0 velocity Verlet exactly as
     chainmodel.integrate.Verlet, 1 classic RK4); inputs from :func:`_hermite` and a linear load.
-    Returns -1 on success or the index of the step after which the state diverged."""
+    Returns -1 on success or the index of the step after which the state diverged.
+
+    Verlet evaluates the position-dependent forces once per step (:func:`_geometry_loops` at
+    the new positions) and the velocity-dependent pass twice (:func:`_forces_loops`: at the
+    half-step velocity for the second half kick, at the end velocity for the next step's
+    first), the numbers of two full evaluations. ``started``: ``acc`` already holds the forces
+    at (t0, x) (the caller's pass on the geometry in ``scr``)."""
     n = x.shape[0]
     nq = n // 2
     q = x[:nq]
@@ -353,21 +448,36 @@ def _run_fixed_loops(method, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
     for step in range(nsteps):
         t = t0 + step * h
         if method == 0:
-            ang, spd, ac = _HERMITE(t, T0, H, a0, w0, a1, w1)
-            ld = L0 + (L1 - L0) * ((t - T0) / H if H > 0 else 0.0)
-            st, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc, tension, fcon, side, dist,
-                           seat_angle, scr)
+            if not started:
+                ang, spd, ac = _HERMITE(t, T0, H, a0, w0, a1, w1)
+                ld = L0 + (L1 - L0) * ((t - T0) / H if H > 0 else 0.0)
+                st, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc, tension, fcon, side, dist,
+                               seat_angle, scr)
             for i in range(nq):
                 v[i] += 0.5 * h * acc[i]
                 q[i] += h * v[i]
             ang, spd, ac = _HERMITE(t + h, T0, H, a0, w0, a1, w1)
             ld = L0 + (L1 - L0) * ((t + h - T0) / H if H > 0 else 0.0)
-            st2, _ = _ACCEL(q, v, ang, spd, ac, ld, P, acc2, tension, fcon, side, dist,
-                            seat_angle, scr)
+            st2 = _GEOM(q, ang, P, dist, seat_angle, scr)
+            st2, _ = _FORCES(q, v, ang, spd, ac, ld, P, acc2, tension, fcon, side, seat_angle,
+                             scr, st2)
             for i in range(nq):
                 v[i] += 0.5 * h * acc2[i]
             if st2 != 0:
                 return step
+            # the next step starts with the forces at these positions and the end velocity, at
+            # its own time; the positions' part (the seat search, the links' geometry) is the
+            # one just made unless the input angle moves the driver (a rigid input shaft)
+            # between the two times: the same numbers as a full evaluation, for less
+            started = False
+            if step + 1 < nsteps:
+                tn = t0 + (step + 1) * h
+                ang2, spd2, ac2 = _HERMITE(tn, T0, H, a0, w0, a1, w1)
+                if P[I_RIGID] == 0.0 or ang2 == ang:
+                    ld2 = L0 + (L1 - L0) * ((tn - T0) / H if H > 0 else 0.0)
+                    _FORCES(q, v, ang2, spd2, ac2, ld2, P, acc, tension, fcon, side, seat_angle,
+                            scr, 0)
+                    started = True
         else:
             for stage in range(4):
                 if stage == 0:
@@ -495,23 +605,25 @@ def spans_numpy(q, dist, side, seat_angle, tol, P, mids, out):
                      fwd[np.argmax(ef)] if ef.any() else mid)
 
 
-OUTPUT_NAMES = ("driver.angle", "driver.speed", "driven.angle", "driven.speed",
-                "driven.acceleration", "input_shaft.torque", "tight_span.tension",
-                "slack_span.tension", "tight_span.length", "velocity_ratio", "transmission_error",
-                "tight_span.midspan_deflection", "chain.max_link_tension", "contact.max_force",
-                "chain.min_link_tension")
 
 
 def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, seat_angle,
-                   scr, mids, tol, reverse, tooth_ratio, spans, out):
+                   scr, mids, tol, reverse, tooth_ratio, spans, out, geometry):
     """Every output (order OUTPUT_NAMES) at state x; the same as MultibodyModel's numpy path.
-    velocity_ratio is driven / driver speed (the caller replaces it while the driver rests)."""
+    velocity_ratio is driven / driver speed (the caller replaces it while the driver rests).
+    ``geometry``: ``scr``, ``dist`` and ``seat_angle`` already hold the positions' part at x
+    and the input angle does not move the seats (a flexible input shaft): only the forces'
+    pass is made (the same numbers; the status returned is then the forces' alone)."""
     n = x.shape[0] // 2
     M = (n - 2) // 2
     q = x[:n]
     v = x[n:]
-    status, shaft = _ACCEL(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist,
-                           seat_angle, scr)
+    if geometry:
+        status, shaft = _FORCES(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side,
+                                seat_angle, scr, 0)
+    else:
+        status, shaft = _ACCEL(q, v, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side,
+                               dist, seat_angle, scr)
     _SPANS(q, dist, side, seat_angle, tol, P, mids, spans)
     rigid = P[I_RIGID] != 0.0
     phi1 = tau if rigid else q[0]
@@ -557,21 +669,21 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
             tmin = tension[i]
         if fcon[i] > fmax:
             fmax = fcon[i]
-    out[0] = phi1
-    out[1] = w1
-    out[2] = q[1]
-    out[3] = v[1]
-    out[4] = acc[1]
-    out[5] = shaft
-    out[6] = tension[spans[t_span, 0]]
-    out[7] = tension[spans[s_span, 0]]
-    out[8] = length
-    out[9] = v[1] / w1 if w1 != 0.0 else 0.0
-    out[10] = q[1] - tooth_ratio * phi1
-    out[11] = deflection
-    out[12] = tmax
-    out[13] = fmax
-    out[14] = tmin
+    out[O_DRIVER_ANGLE] = phi1
+    out[O_DRIVER_SPEED] = w1
+    out[O_DRIVEN_ANGLE] = q[1]
+    out[O_DRIVEN_SPEED] = v[1]
+    out[O_DRIVEN_ACCELERATION] = acc[1]
+    out[O_INPUT_SHAFT_TORQUE] = shaft
+    out[O_TIGHT_SPAN_TENSION] = tension[spans[t_span, 0]]
+    out[O_SLACK_SPAN_TENSION] = tension[spans[s_span, 0]]
+    out[O_TIGHT_SPAN_LENGTH] = length
+    out[O_VELOCITY_RATIO] = v[1] / w1 if w1 != 0.0 else 0.0
+    out[O_TRANSMISSION_ERROR] = q[1] - tooth_ratio * phi1
+    out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = deflection
+    out[O_CHAIN_MAX_LINK_TENSION] = tmax
+    out[O_CONTACT_MAX_FORCE] = fmax
+    out[O_CHAIN_MIN_LINK_TENSION] = tmin
     return status
 
 
@@ -638,6 +750,7 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
     per_step = 2 if method == 0 else 4
     steps = 0
     evals = 0
+    geometry = False        # scr holds the position-dependent part at x (its last step's end)
     for i in range(1, times.shape[0]):
         t0 = times[i - 1]
         H = times[i] - t0
@@ -650,9 +763,19 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
             h_max = min(cfg[CF_STAB] / w, cfg[CF_THETA] / w, cfg[CF_MAX])
         m = max(1, int(math.ceil(H / h_max - 1e-9)))
         hh = H / m
+        started = False
+        if method == 0 and geometry and P[I_RIGID] == 0.0:
+            # the first step's forces at (t0, x) from the geometry already in scr (a flexible
+            # input shaft: the input angle does not move the seats): what _RUN would compute
+            ang, spd, ac = _HERMITE(t0, t0, H, angle[i - 1], speed[i - 1], angle[i], speed[i])
+            ld = load[i - 1] + (load[i] - load[i - 1]) * ((t0 - t0) / H if H > 0 else 0.0)
+            _FORCES(x[:nq], x[nq:], ang, spd, ac, ld, P, acc1, tension, fcon, side, seat_angle,
+                    scr, 0)
+            started = True
         bad = _RUN(method, x, t0, hh, m, t0, H, angle[i - 1], speed[i - 1], angle[i], speed[i],
                    load[i - 1], load[i], P, acc1, acc2, k1, k2, k3, k4, xt, tension, fcon, side,
-                   dist, seat_angle, scr)
+                   dist, seat_angle, scr, started)
+        geometry = method == 0
         if bad >= 0:
             return i - 1, 1, steps + bad + 1, 0, evals + (bad + 1) * per_step, 0, \
                 t0 + (bad + 1) * hh, 0.0
@@ -663,7 +786,8 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
                 states[i, j] = x[j]
         if want_out:
             _OUT(x, angle[i], speed[i], acc[i], load[i], P, acc1, tension, fcon, side, dist,
-                 seat_angle, scr, mids, tol, speed[i] < 0.0, tooth_ratio, spans, OUT[i])
+                 seat_angle, scr, mids, tol, speed[i] < 0.0, tooth_ratio, spans, OUT[i],
+                 method == 0 and P[I_RIGID] == 0.0)
             evals += 1
             for k in range(OUT.shape[1]):
                 if not math.isfinite(OUT[i, k]):
@@ -700,6 +824,8 @@ def _advance_held_loops(method, x_in, x_out, t0, t1, a0, w0, accel, ld, P, OM, c
 
 if HAVE_NUMBA:  # pragma: no branch
     # numba resolves the loop's callees by their global names at compile time
+    _GEOM = njit(_geometry_loops)
+    _FORCES = njit(_forces_loops)
     _ACCEL = njit(_accel_loops)
     _HERMITE = njit(_hermite)
     _run_fixed_jit = njit(_run_fixed_loops)
@@ -712,6 +838,7 @@ if HAVE_NUMBA:  # pragma: no branch
     _POINTS = njit(_advance_points_loops)
     _HELD = njit(_advance_held_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
+    _GEOM, _FORCES = _geometry_loops, _forces_loops
     _ACCEL, _HERMITE, _run_fixed_jit, _SPANS, _outputs_jit, _ENGAGED = (
         _accel_loops, _hermite, _run_fixed_loops, _spans_loops, _outputs_loops, _engaged_loops)
     _RUN, _OUT, _OMEGA, _POINTS, _HELD = (_run_fixed_loops, _outputs_loops, _omega_loops,
@@ -735,7 +862,7 @@ class Workspace:
         self.side = np.zeros(M, np.int64)
         self.dist = np.zeros((2, M))
         self.seat_angle = np.zeros((2, M))
-        self.scr = np.zeros(M)
+        self.scr = np.zeros(SCR_ROWS * M)
 
     def diagnostics(self):
         return self.tension, self.fcon, self.side, self.dist, self.seat_angle
@@ -754,7 +881,7 @@ def outputs_numba(x, tau, tau_d, tau_dd, load, P, ws: Workspace, mids, tol, reve
                   tooth_ratio, spans, out):
     return int(_outputs_jit(x, float(tau), float(tau_d), float(tau_dd), float(load), P, ws.acc,
                             ws.tension, ws.fcon, ws.side, ws.dist, ws.seat_angle, ws.scr, mids,
-                            float(tol), bool(reverse), float(tooth_ratio), spans, out))
+                            float(tol), bool(reverse), float(tooth_ratio), spans, out, False))
 
 
 def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
@@ -763,7 +890,7 @@ def run_fixed_numba(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1
     return int(_run_fixed_jit(method, x, float(t0), float(h), int(nsteps), float(T0), float(H),
                               float(a0), float(w0), float(a1), float(w1), float(L0), float(L1),
                               P, ws.acc, ws.acc2, k1, k2, k3, k4, ws.xt, ws.tension, ws.fcon,
-                              ws.side, ws.dist, ws.seat_angle, ws.scr))
+                              ws.side, ws.dist, ws.seat_angle, ws.scr, False))
 
 
 def advance_points_numba(method: int, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg,

@@ -41,6 +41,11 @@ import math
 
 import numpy as np
 
+from .outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION,  # noqa: F401
+                      O_CONTACT_MAX_FORCE, O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
+                      O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
+                      O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
+                      O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
                     P_RHOA, P_RIGID, evaluate, jit)
@@ -53,7 +58,7 @@ __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "out
 C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
 C_SIZE = 10
 
-# --- step rule (built by FixedStepper.step_config) ----------------------------------------------
+# --- step rule (FixedStepper.cfg) ----------------------------------------------
 #: explicit step (0: automatic), theta = h w of the tolerance, safety * stability limit, the
 #: stability limit itself (2 sqrt 2), an outer bound on the automatic step
 CF_STEP, CF_THETA, CF_STAB, CF_LIMIT, CF_MAX = range(5)
@@ -81,8 +86,6 @@ V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo
 EVENT_TOL = 1e-5
 EVENT_GAP = 1e-4
 
-#: outputs, in ALL_OUTPUTS order (chainmodel.models.base)
-N_OUTPUTS = 15
 
 
 @jit
@@ -496,27 +499,27 @@ def fill_outputs(x, aux, w_in, P, Q, out):
         length = aux[A_L_LOW]
     centrifugal = Q[Q_CENTRIFUGAL] * w1 * w1
     ratio = Q[Q_RATIO]
-    out[0] = phi1
-    out[1] = w1
-    out[2] = phi2
-    out[3] = w2
-    out[4] = aux[A_ACC2]
-    out[5] = aux[A_TAU_IN]
-    out[6] = tight + centrifugal
-    out[7] = slack + centrifugal
-    out[8] = length
+    out[O_DRIVER_ANGLE] = phi1
+    out[O_DRIVER_SPEED] = w1
+    out[O_DRIVEN_ANGLE] = phi2
+    out[O_DRIVEN_SPEED] = w2
+    out[O_DRIVEN_ACCELERATION] = aux[A_ACC2]
+    out[O_INPUT_SHAFT_TORQUE] = aux[A_TAU_IN]
+    out[O_TIGHT_SPAN_TENSION] = tight + centrifugal
+    out[O_SLACK_SPAN_TENSION] = slack + centrifugal
+    out[O_TIGHT_SPAN_LENGTH] = length
     # at rest the instantaneous ratio is undefined; report the mean (tooth) ratio
-    out[9] = w2 / w1 if abs(w1) > 1e-9 else ratio
-    out[10] = phi2 - ratio * phi1
+    out[O_VELOCITY_RATIO] = w2 / w1 if abs(w1) > 1e-9 else ratio
+    out[O_TRANSMISSION_ERROR] = phi2 - ratio * phi1
     if int(P[P_MODES]) > 0:
-        out[11] = aux[A_MID_UP] if upper else aux[A_MID_LOW]
+        out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = aux[A_MID_UP] if upper else aux[A_MID_LOW]
     elif tight > 0.0:
-        out[11] = -min(Q[Q_SAG] * length * length / tight, 0.5 * length)
+        out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = -min(Q[Q_SAG] * length * length / tight, 0.5 * length)
     else:
-        out[11] = -0.5 * length
-    out[12] = max(tight, slack) + centrifugal
-    out[13] = tight
-    out[14] = min(tight, slack) + centrifugal
+        out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = -0.5 * length
+    out[O_CHAIN_MAX_LINK_TENSION] = max(tight, slack) + centrifugal
+    out[O_CONTACT_MAX_FORCE] = tight
+    out[O_CHAIN_MIN_LINK_TENSION] = min(tight, slack) + centrifugal
 
 
 @jit

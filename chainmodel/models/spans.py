@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from .._numba import import_numba, njit
+from .._numba import ENABLED, jit
 
 __all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
 
@@ -40,22 +40,8 @@ _TWO_PI = 2.0 * math.pi
 G_SIZE = 13
 
 
-_numba = import_numba()   # optional acceleration; everything below also runs as plain Python
-try:
-    if _numba is None:
-        raise ImportError
-
-    def jit(fn):
-        """Compile with numba (cached once per machine); the plain function stays at ``.py_func``."""
-        return njit(fn, fastmath=False)
-
-    NUMBA = True
-except Exception:  # pragma: no cover - exercised with CHAINMODEL_NUMBA=0
-    def jit(fn):
-        fn.py_func = fn
-        return fn
-
-    NUMBA = False
+#: the one numba switch (chainmodel._numba.ENABLED), under its old name
+NUMBA = ENABLED
 
 
 def geometry_constants(drive) -> np.ndarray:

@@ -47,7 +47,7 @@ from . import rk4_loop as L
 from . import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
-from .kinematic import seat_series_compliance, seat_stiffness, static_span_tension
+from .static_tension import seat_series_compliance, seat_stiffness, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -259,16 +259,18 @@ class TorsionalModel(Model):
     def _amplitude_limit(self) -> float:
         return math.inf
 
-    def _compiled(self, method) -> bool:
-        return method in self.compiled_methods and S.NUMBA
+    def has_loop_kernel(self, method: str) -> bool:
+        """rk4: rk4_loop's loop, compiled with numba and run as its plain Python source without
+        (one source for the step rule, the event crossing and the outputs)."""
+        return method in self.compiled_methods
 
     def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
                        out, states, log, log_cap):
         """The fixed-step loop of ``method`` through the communication points ``times`` in one
         compiled call (:func:`chainmodel.models.rk4_loop.advance_points`: step rule, guard,
         events, outputs into ``out`` rows 1.., states into ``states``; x_in untouched, the
-        final state in x_out), or None when there is none (another method, no numba)."""
-        if not self._compiled(method):
+        final state in x_out), or None when there is none (another method)."""
+        if not self.has_loop_kernel(method):
             return None
         return L.advance_points(x_in, x_out, times, angle, speed, acceleration, torque, self.G,
                                 self.P, self.loop_constants, cfg, out, states, log, log_cap)
@@ -277,7 +279,7 @@ class TorsionalModel(Model):
                      out, log):
         """:meth:`advance_points` over one communication step with the inputs held first-order
         (the FMU's hold), outputs at t1 in out[1]; None when there is no compiled path."""
-        if not self._compiled(method):
+        if not self.has_loop_kernel(method):
             return None
         return L.advance_held(x_in, x_out, t0, t1, angle, speed, acceleration, torque, self.G,
                               self.P, self.loop_constants, cfg, out, log)

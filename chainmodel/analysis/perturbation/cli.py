@@ -16,7 +16,7 @@ CASES = ("parametric", "sprocket", "combined")
 
 
 def register(subparsers) -> None:
-    from ...cli import add_drive_arguments, add_output_arguments
+    from ...cli_support import add_drive_arguments, add_output_arguments
     p = subparsers.add_parser(
         "frequency-response",
         help="multiple-scales frequency response of seed 004 (Figs 6-9)",
@@ -98,7 +98,7 @@ class _SlowTimeProgress:
 
 def run_frequency_response(args) -> int:
     import numpy as np
-    from ...cli import drive_dict, drive_from_args, print_json, write_csv_columns
+    from ...cli_support import drive_dict, drive_from_args, print_json, write_csv_columns
     from . import coefficients, response
 
     drive_flags = ("preset", "driver_teeth", "driven_teeth", "span_pitches", "pitch_fraction",

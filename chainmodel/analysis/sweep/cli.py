@@ -53,7 +53,7 @@ def register(subparsers) -> None:
 
 
 def run_sweep(args) -> int:
-    from ...cli import _fmu_path, _parse_settings, print_json
+    from ...cli_support import fmu_path as _fmu_path, parse_settings as _parse_settings, print_json
     from . import sweep
     fixed = _parse_settings(args.settings)
     fmu = None if args.via_fmu is None else _fmu_path(args.via_fmu)

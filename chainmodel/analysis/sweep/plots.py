@@ -25,7 +25,7 @@ from .table import as_float_array
 __all__ = ["plot_campbell", "plot_resonance_map", "speed_axis", "default_map_metric",
            "axis_label"]
 
-RPM = 2 * math.pi / 60
+from ...units import RPM  # noqa: E402  (one definition: chainmodel.units)
 _MAX_PANELS = 6
 
 

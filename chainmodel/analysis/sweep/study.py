@@ -116,7 +116,7 @@ class Study:
         """What makes a case's result: the base scene, the metric options, the FMU (by hash)
         and the library version - part of every case key, so a resumed sweep reuses a stored
         result only if it would compute the same."""
-        from ... import __version__
+        from ..._version import __version__
         b = self.base
         text = json.dumps({"parameters": b.parameters, "operating": [b.operating.speed,
                            b.operating.ramp_time, b.operating.load_torque],
