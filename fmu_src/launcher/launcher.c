@@ -26,7 +26,9 @@
  * are the same in every Python 3.
  *
  * Compiled by build_fmu.py: cc -shared -fPIC -O2 launcher.c -ldl -lpthread -Wl,-z,nodelete with
- * launcher_config.h (generated) defining RECORDED_PYTHON, RECORDED_LIBPYTHON and BACKEND_FILE.
+ * launcher_config.h (generated) defining RECORDED_PYTHON, RECORDED_LIBPYTHON, BACKEND_FILE and
+ * FMU_NAME (for messages). Nothing in it is ChainDrive's: build_fmu.py --launch puts it in front
+ * of any pythonfmu FMU's binary.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -174,13 +176,13 @@ static int start_python(void)
         } else {
             python = override;
             if (access(python, X_OK) != 0) {
-                set_problem("ChainDrive FMU: no Python to run in: %s is not an executable "
+                set_problem(FMU_NAME ": no Python to run in: %s is not an executable "
                             "file (%s); give a python executable (a venv's is fine) or a "
                             "libpython", python, origin);
                 return -1;
             }
             if (ask_python_for_libpython(python, asked, sizeof asked) != 0 || !*asked) {
-                set_problem("ChainDrive FMU: no Python to run in: %s reports no shared "
+                set_problem(FMU_NAME ": no Python to run in: %s reports no shared "
                             "libpython (%s); use a Python built with --enable-shared, or "
                             "give its libpython", python, origin);
                 return -1;
@@ -192,14 +194,14 @@ static int start_python(void)
                  "a python executable or a libpython to use another", RECORDED_PYTHON,
                  OVERRIDE_VARIABLE);
         if (!*libpython) {
-            set_problem("ChainDrive FMU: no Python to run in: the Python that built the FMU "
+            set_problem(FMU_NAME ": no Python to run in: the Python that built the FMU "
                         "(%s) has no shared libpython; set %s to a python executable or "
                         "libpython of a Python built with --enable-shared", RECORDED_PYTHON,
                         OVERRIDE_VARIABLE);
             return -1;
         }
         if (access(python, X_OK) != 0) {
-            set_problem("ChainDrive FMU: no Python to run in: looked for the python executable "
+            set_problem(FMU_NAME ": no Python to run in: looked for the python executable "
                         "%s and its libpython %s (%s): the executable does not exist", python,
                         libpython, origin);
             return -1;
@@ -207,7 +209,7 @@ static int start_python(void)
     }
     lib = dlopen(libpython, RTLD_NOW | RTLD_GLOBAL);
     if (!lib) {
-        set_problem("ChainDrive FMU: no Python to run in: looked for libpython %s (%s): %s",
+        set_problem(FMU_NAME ": no Python to run in: looked for libpython %s (%s): %s",
                     libpython, origin, dlerror());
         return -1;
     }
@@ -223,7 +225,7 @@ static int start_python(void)
     py.run_string = (int (*)(const char *))dlsym(lib, "PyRun_SimpleString");
     if (!is_initialized || !initialize_ex || !set_program_name || !decode || !save_thread ||
         !py.gil_ensure || !py.gil_release || !py.run_string) {
-        set_problem("ChainDrive FMU: %s is not a usable libpython (%s): a function of "
+        set_problem(FMU_NAME ": %s is not a usable libpython (%s): a function of "
                     "Python's C API is missing", libpython, origin);
         return -1;
     }
@@ -269,14 +271,14 @@ static void load(void)
         return;
     }
     if (own_directory(backend_path, sizeof backend_path - strlen(BACKEND_FILE)) != 0) {
-        set_problem("ChainDrive FMU: cannot find the folder of its own binary (dladdr)");
+        set_problem(FMU_NAME ": cannot find the folder of its own binary (dladdr)");
         fprintf(stderr, "%s\n", problem);
         return;
     }
     strcat(backend_path, BACKEND_FILE);
     backend = dlopen(backend_path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (!backend) {
-        set_problem("ChainDrive FMU: cannot load pythonfmu's binary %s: %s", backend_path,
+        set_problem(FMU_NAME ": cannot load pythonfmu's binary %s: %s", backend_path,
                     dlerror());
         fprintf(stderr, "%s\n", problem);
         return;
@@ -284,7 +286,7 @@ static void load(void)
 #define RESOLVE(name) p_##name = (name##TYPE *)dlsym(backend, #name);
     FMI2_FUNCTIONS(RESOLVE)
     if (!p_fmi2Instantiate) {
-        set_problem("ChainDrive FMU: %s exports no fmi2Instantiate", backend_path);
+        set_problem(FMU_NAME ": %s exports no fmi2Instantiate", backend_path);
         fprintf(stderr, "%s\n", problem);
         return;
     }

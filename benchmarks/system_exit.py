@@ -1,0 +1,96 @@
+#!/usr/bin/env python
+"""Does a process holding ChainDrive.fmu and the example system's two plain pythonfmu FMUs
+(examples/system: Motor, Load) exit cleanly? And if not, whose crash is it?
+
+    python benchmarks/system_exit.py dist/ChainDrive.fmu --runs 50         # table of exit codes
+    python benchmarks/system_exit.py dist/ChainDrive.fmu --bisect --runs 40
+                  # the same count for every combination of the three FMUs
+    python benchmarks/system_exit.py dist/ChainDrive.fmu --valgrind       # one run under valgrind:
+                  # which FMU's binary reads or frees freed memory at exit
+
+Each run is a fresh Python executing tests/test_system_exit.py's SYSTEM_LIFE script (fmpy: every
+FMU extracted, instantiated, initialized, 10 coupled steps of 0.1 ms at fidelity 0, terminated,
+freed, folder deleted; normal exit). The example FMUs are built first (examples/system/build.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import itertools
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "examples" / "system"))
+
+
+def count(script: str, runs: int) -> collections.Counter:
+    counts = collections.Counter()
+    for _ in range(runs):
+        proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+        ok = proc.returncode == 0 and proc.stdout.strip().endswith("done")
+        corrupted = "corrupted" in proc.stderr or "free()" in proc.stderr
+        counts["clean" if ok and not corrupted else f"exit {proc.returncode}"
+               + (" (heap corruption message)" if corrupted else "")] += 1
+    return counts
+
+
+def valgrind(script: str) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        log = Path(tmp) / "vg.txt"
+        env = dict(os.environ, PYTHONMALLOC="malloc", CHAINMODEL_NUMBA="0")
+        proc = subprocess.run(["valgrind", "--num-callers=30", f"--log-file={log}",
+                               sys.executable, "-c", script], env=env, capture_output=True,
+                              text=True)
+        lines = log.read_text().splitlines()
+    reports, current = [], None
+    for line in lines:
+        body = re.sub(r"^==\d+== ?", "", line)
+        if body.startswith("Invalid"):
+            current = [body]
+            reports.append(current)
+        elif current is not None and body.strip():
+            current.append(body)
+        else:
+            current = None
+    print(f"valgrind: {len(reports)} invalid accesses, process exit {proc.returncode}")
+    for r in reports:
+        libs = sorted(set(re.findall(r"\((?:in|within) [^)]*/([^/)]+\.so)\)", "\n".join(r))))
+        print(f"- {r[0]}  [{', '.join(libs)}]")
+        print("    " + "\n    ".join(r[1:8]))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("fmu", type=Path, help="ChainDrive.fmu")
+    ap.add_argument("--runs", type=int, default=50)
+    ap.add_argument("--bisect", action="store_true", help="every combination of the FMUs")
+    ap.add_argument("--valgrind", action="store_true")
+    args = ap.parse_args(argv)
+    from test_system_exit import system_script
+    import build as examples
+    tmp = tempfile.TemporaryDirectory()
+    fmus = {"ChainDrive": args.fmu.resolve()}
+    fmus.update(zip(examples.MODELS, examples.build(Path(tmp.name))))
+    if args.valgrind:
+        valgrind(system_script(fmus))
+        return 0
+    combos = [tuple(fmus)]
+    if args.bisect:
+        combos = [c for k in (1, 2, 3) for c in itertools.combinations(fmus, k)]
+    print(f"| FMUs in the process | runs | result |\n|---|---|---|")
+    for combo in combos:
+        counts = count(system_script({k: fmus[k] for k in combo}), args.runs)
+        print(f"| {' + '.join(combo)} | {args.runs} | "
+              + ", ".join(f"{k}: {v}" for k, v in sorted(counts.items())) + " |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
