@@ -244,3 +244,42 @@ def test_a_python_host_runs_the_fmu_in_its_own_interpreter(chaindrive_fmu_dir, f
         assert adapter in sys.modules
     finally:
         s.freeInstance()
+
+
+# --- building the launcher ---------------------------------------------------------------------
+
+def test_without_a_c_compiler_the_build_says_so_and_ships_pythonfmus_binary(tmp_path):
+    import pythonfmu
+    out = tmp_path / "ChainDrive.fmu"
+    env = {k: v for k, v in os.environ.items() if k != "CC"}
+    env["PATH"] = str(tmp_path / "no-compilers-here")
+    proc = subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--out", str(out), "-q",
+                           "--warm", "none"], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert "no C compiler found" in proc.stderr and "pythonfmu's binary" in proc.stderr
+    original = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+                / "libpythonfmu-export.so").read_bytes()
+    with zipfile.ZipFile(out) as z:
+        assert z.read("binaries/linux64/ChainDrive.so") == original
+        assert "binaries/linux64/ChainDrive.pythonfmu.so" not in z.namelist()
+
+
+def test_launch_refuses_what_it_cannot_launch(tmp_path, chaindrive_fmu):
+    def launch(fmu):
+        return subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--launch", str(fmu),
+                               "--out", str(tmp_path / "out.fmu")], capture_output=True,
+                              text=True)
+
+    proc = launch(chaindrive_fmu)          # already launched
+    assert proc.returncode == 2 and "already has a launcher (ChainDrive.pythonfmu.so)" in proc.stderr
+    other = tmp_path / "NotPython.fmu"
+    with zipfile.ZipFile(chaindrive_fmu) as src, zipfile.ZipFile(other, "w") as dst:
+        for name in src.namelist():
+            if name.startswith("resources/") or name.endswith(".pythonfmu.so"):
+                continue
+            dst.writestr(name, src.read(name))
+    proc = launch(other)
+    assert proc.returncode == 2 and "not a pythonfmu FMU" in proc.stderr
+    proc = launch(tmp_path / "missing.fmu")
+    assert proc.returncode == 2 and "missing.fmu" in proc.stderr
+    assert not (tmp_path / "out.fmu").exists()
