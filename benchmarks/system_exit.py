@@ -38,9 +38,10 @@ def count(script: str, runs: int) -> collections.Counter:
     for _ in range(runs):
         proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
         ok = proc.returncode == 0 and proc.stdout.strip().endswith("done")
+        last = (proc.stderr.strip().splitlines() or [""])[-1][:60]
         corrupted = "corrupted" in proc.stderr or "free()" in proc.stderr
         counts["clean" if ok and not corrupted else f"exit {proc.returncode}"
-               + (" (heap corruption message)" if corrupted else "")] += 1
+               + (f" ({last})" if last else "")] += 1
     return counts
 
 
