@@ -10,6 +10,8 @@
     ... --launch-examples     # the example FMUs with ChainDrive's launcher in front of their
                               # binaries (examples/system/build.py --launch), as docs/fmu.md
                               # tells users to build theirs
+    ... --chaindrive-first    # load order ChainDrive, Motor, Load
+    ... --os-exit             # each process ends with os._exit(0) after flushing stdout
 
 Each run is a fresh Python executing tests/test_system_exit.py's SYSTEM_LIFE script (fmpy: every
 FMU extracted, instantiated, initialized in the order Motor, ChainDrive, Load, 10 coupled steps
@@ -82,6 +84,10 @@ def main(argv=None) -> int:
     ap.add_argument("--bisect", action="store_true", help="every combination of the FMUs")
     ap.add_argument("--valgrind", action="store_true")
     ap.add_argument("--launch-examples", action="store_true")
+    ap.add_argument("--os-exit", action="store_true",
+                    help="end each process with os._exit(0) (no exit handlers run)")
+    ap.add_argument("--chaindrive-first", action="store_true",
+                    help="load order ChainDrive, Motor, Load (default Motor, ChainDrive, Load)")
     args = ap.parse_args(argv)
     from test_system_exit import system_script
     import build as examples
@@ -89,15 +95,18 @@ def main(argv=None) -> int:
     motor, load = examples.build(Path(tmp.name), args.launch_examples)
     # the system's order (motor, chain drive, load), the order a master adds them in
     fmus = {"Motor": motor, "ChainDrive": args.fmu.resolve(), "Load": load}
+    if args.chaindrive_first:
+        fmus = {"ChainDrive": fmus.pop("ChainDrive"), **fmus}
+    tail = "import os, sys\nsys.stdout.flush()\nos._exit(0)\n" if args.os_exit else ""
     if args.valgrind:
-        valgrind(system_script(fmus))
+        valgrind(system_script(fmus) + tail)
         return 0
     combos = [tuple(fmus)]
     if args.bisect:
         combos = [c for k in (1, 2, 3) for c in itertools.combinations(fmus, k)]
     print(f"| FMUs in the process | runs | result |\n|---|---|---|")
     for combo in combos:
-        counts = count(system_script({k: fmus[k] for k in combo}), args.runs)
+        counts = count(system_script({k: fmus[k] for k in combo}) + tail, args.runs)
         print(f"| {' + '.join(combo)} | {args.runs} | "
               + ", ".join(f"{k}: {v}" for k, v in sorted(counts.items())) + " |", flush=True)
     return 0

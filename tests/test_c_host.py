@@ -151,10 +151,15 @@ def run_master(master, fmu_dir, fmu_vars, level, steps, step_ns=100_000, env=Non
                           capture_output=True, text=True, timeout=600)
 
 
+def pythonfmus_binary() -> bytes:
+    """The Linux binary of the installed pythonfmu (not of a copy an FMU put on sys.path)."""
+    from importlib.metadata import distribution
+    return Path(distribution("pythonfmu").locate_file(
+        "pythonfmu/resources/binaries/linux64/libpythonfmu-export.so")).read_bytes()
+
+
 def test_the_fmu_ships_the_launcher_in_front_of_pythonfmus_binary(chaindrive_fmu):
-    import pythonfmu
-    original = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
-                / "libpythonfmu-export.so").read_bytes()
+    original = pythonfmus_binary()
     with zipfile.ZipFile(chaindrive_fmu) as z:
         assert z.read("binaries/linux64/ChainDrive.pythonfmu.so") == original
         launcher = z.read("binaries/linux64/ChainDrive.so")
@@ -249,7 +254,6 @@ def test_a_python_host_runs_the_fmu_in_its_own_interpreter(chaindrive_fmu_dir, f
 # --- building the launcher ---------------------------------------------------------------------
 
 def test_without_a_c_compiler_the_build_says_so_and_ships_pythonfmus_binary(tmp_path):
-    import pythonfmu
     out = tmp_path / "ChainDrive.fmu"
     env = {k: v for k, v in os.environ.items() if k != "CC"}
     env["PATH"] = str(tmp_path / "no-compilers-here")
@@ -257,8 +261,7 @@ def test_without_a_c_compiler_the_build_says_so_and_ships_pythonfmus_binary(tmp_
                            "--warm", "none"], capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stderr
     assert "no C compiler found" in proc.stderr and "pythonfmu's binary" in proc.stderr
-    original = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
-                / "libpythonfmu-export.so").read_bytes()
+    original = pythonfmus_binary()
     with zipfile.ZipFile(out) as z:
         assert z.read("binaries/linux64/ChainDrive.so") == original
         assert "binaries/linux64/ChainDrive.pythonfmu.so" not in z.namelist()
