@@ -11,6 +11,9 @@
     python build_fmu.py --default chain.link_stiffness=1.02e8 --out other.fmu
                                             # other parameter defaults (start values), e.g.
                                             # a user's own drive, or a perturbed build for tests
+    python build_fmu.py --no-launcher       # pythonfmu's binary as ChainDrive.so (no launcher)
+    python build_fmu.py --launch Motor.fmu  # only put the launcher in front of another
+                                            # pythonfmu FMU's binary (in place, or --out)
 
 Steps:
 1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` and the
@@ -24,6 +27,11 @@ Steps:
    the regression references references/ as fmu_references/, which ``chainmodel fmu-test``
    uses); ``--default NAME=VALUE`` writes ``resources/_vendor/defaults.json``, which the
    adapter's parameters start from, and the same value as the start value in the XML;
+   On Linux, with a C compiler (``$CC``, cc or gcc), ``binaries/linux64/ChainDrive.so`` is the
+   launcher (``fmu_src/launcher/launcher.c``, compiled for the Python running this script, whose
+   executable and libpython it records) and pythonfmu's binary ships beside it as
+   ``ChainDrive.pythonfmu.so``: C/C++ hosts need no set-up (docs/fmu.md, "Hosts"). Without a
+   compiler the build says so on stderr and ships pythonfmu's binary as ``ChainDrive.so``;
 3. complete the modelDescription.xml pythonfmu writes: unit definitions with SI base units and
    display units, a unit on every Real, min/max of the parameters, explicit causality /
    variability / initial, output descriptions that say at which fidelity levels each output is
