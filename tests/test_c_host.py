@@ -235,6 +235,30 @@ def test_override_starts_a_venv_whose_pth_files_run(master, chaindrive_fmu_dir, 
     assert len(proc.stdout.splitlines()) == 3
 
 
+def old_recipe() -> dict:
+    """docs/fmu.md's environment for an FMU without the launcher (LD_PRELOAD, PYTHONHOME,
+    PYTHONPATH, PYTHONMALLOC)."""
+    import sysconfig
+    libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("INSTSONAME")
+    return {"LD_PRELOAD": libpython, "PYTHONHOME": sys.base_prefix,
+            "PYTHONPATH": sysconfig.get_paths()["purelib"], "PYTHONMALLOC": "malloc"}
+
+
+@pytest.mark.parametrize("variant", ["libpython preloaded, not initialized", "the old recipe"])
+def test_a_host_with_libpython_but_no_interpreter_yet(master, chaindrive_fmu_dir, fmu_vars,
+                                                      variant):
+    """Py_IsInitialized present but false (a host that loads libpython, or a user still setting
+    the old recipe's variables): the launcher starts that Python; same outputs as under env -i."""
+    env = old_recipe()
+    if variant.startswith("libpython"):
+        env = {"LD_PRELOAD": env["LD_PRELOAD"]}
+    assert Path(env["LD_PRELOAD"]).is_file()
+    bare = run_master(master, chaindrive_fmu_dir, fmu_vars, 0, 5)
+    proc = run_master(master, chaindrive_fmu_dir, fmu_vars, 0, 5, env=env)
+    assert bare.returncode == 0 and proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout == bare.stdout and len(proc.stdout.splitlines()) == 6
+
+
 def test_a_python_host_runs_the_fmu_in_its_own_interpreter(chaindrive_fmu_dir, fmu_vars):
     """In fmpy the launcher starts nothing: the FMU's modules appear in this interpreter."""
     from fmpy.fmi2 import FMU2Slave
