@@ -246,12 +246,14 @@ static int start_python(void)
     return 0;
 }
 
-/* Directory of this library (the FMU's binaries/<platform>/), with a trailing '/'. */
+/* Directory of this library (the FMU's binaries/<platform>/), with a trailing '/'. The address
+ * asked about is a static function's: an exported one (fmi2Instantiate) could resolve to
+ * another FMU's launcher when a host loads FMUs with RTLD_GLOBAL. */
 static int own_directory(char *out, size_t size)
 {
     Dl_info info;
     const char *slash;
-    if (!dladdr((void *)&fmi2Instantiate, &info) || !info.dli_fname)
+    if (!dladdr((void *)&own_directory, &info) || !info.dli_fname)
         return -1;
     slash = strrchr(info.dli_fname, '/');
     if (!slash || (size_t)(slash - info.dli_fname + 2) > size)
