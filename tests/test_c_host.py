@@ -21,7 +21,9 @@ import pytest
 from chainmodel.fmu_hosts import grid, run_fmu
 from chainmodel.models import ALL_OUTPUTS
 
-pytestmark = pytest.mark.fmu
+pytestmark = [pytest.mark.fmu, pytest.mark.skipif(
+    not sys.platform.startswith("linux"),
+    reason="the launcher and these C hosts are Linux-only: the C-host tests did NOT run")]
 
 ROOT = Path(__file__).resolve().parents[1]
 FMI2_HEADERS = ROOT / "fmu_src" / "launcher" / "fmi2"

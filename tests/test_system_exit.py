@@ -13,7 +13,9 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.fmu
+pytestmark = [pytest.mark.fmu, pytest.mark.skipif(
+    not sys.platform.startswith("linux"),
+    reason="the launcher (build_fmu.py --launch) is Linux-only: the exit tests did NOT run")]
 
 ROOT = Path(__file__).resolve().parents[1]
 
