@@ -359,8 +359,8 @@ def test_item7_pretension_means_the_same_static_tension_at_levels_0_2_and_3():
 def test_item8_reverse_rotation_labels_the_tight_span_true(level):
     """-120 rpm with +43.2 N.m: the load now assists the motion (overrunning) and the upper
     span carries it; with -43.2 N.m it resists and the lower span (the one the driver winds on
-    backwards) does. Either way tight_span is the span with the larger tension, and its
-    length is that span's. (Was: slack 1110 N labelled tight 104 N.)"""
+    backwards) does. Either way tight_span is that physical span (models/span_roles.py), and
+    its length is that span's. (Was: slack 1110 N labelled tight 104 N.)"""
     for load in (43.2, -43.2):
         r = chainmodel.simulate("xu2010", fidelity=level, input_speed_rpm=-120, load_torque=load,
                                 duration=0.12 if level == 3 else 0.2, output_interval=5e-4)
