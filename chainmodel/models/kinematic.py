@@ -19,7 +19,7 @@ eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static s
 seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
 A span cannot push: if one tension would be negative it is zero and the other carries the whole
 torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
-torques), and the tight span is the one with the larger tension (docs/stability.md).
+torques), and the tight span is the one the power flow names (models/span_roles.py).
 """
 
 from __future__ import annotations

@@ -506,8 +506,11 @@ class MultibodyModel(Model):
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
         d["tight_span.tension"] = ("axial force of the tight-span link whose midpoint is nearest "
-                                   "the middle of the span's line (the span whose middle link "
-                                   "carries the larger force)")
+                                   "the middle of the span's line; the tight span is the physical "
+                                   "span the driver pulls for the sign of the transmitted torque "
+                                   "(upper when load.torque + ratio (driven damping x input speed "
+                                   "+ driven inertia x input acceleration) > 0, else lower), "
+                                   "whatever the momentary forces")
         d["slack_span.tension"] = ("axial force of the slack-span link whose midpoint is nearest "
                                    "the middle of the span's line (the other span)")
         d["tight_span.length"] = ("distance between the tight span's endpoint rollers (the last "
