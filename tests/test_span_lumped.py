@@ -105,7 +105,7 @@ def test_level3_span_matches_an_independent_lumped_mass_span():
     y_ours = np.einsum("ij,ij->i", ours - pos[:, a, :], normal)
     y_theirs = np.einsum("ij,ij->i", theirs - pos[:, a, :], normal)
     swing = np.ptp(y_theirs)
-    assert swing > 1e-6                      # the span moves
+    assert swing > 1e-4                      # m: the span swings (0.43 mm measured)
     # the same mechanics: they differ by the integrators' errors only (Verlet's O(h^2) at
     # level 3's step; 1e-5 of the swing measured)
     assert np.max(np.abs(y_ours - y_theirs)) <= 1e-3 * swing
