@@ -12,7 +12,7 @@ CI) with modest example counts.
   tensions run backwards against a mirrored load are the forward ones (no gravity);
 * exact against approximate kinematics within seed 000 section 4.4's bounds (position 0.5 %,
   velocity 0.1 % with the corrected eq 51, acceleration 10 %) for n, N > 12;
-* levels 1-2 on short runs: no NaN, tensions >= the centrifugal tension >= 0, tight >= slack;
+* levels 1-2 on short runs: no NaN, tensions >= the centrifugal tension >= 0, the larger span tension is the largest link tension (span roles follow the power flow);
   level 3 on shorter runs: no NaN, span tensions and the smallest link tension >= 0 (a link
   carries no compression).
 """
