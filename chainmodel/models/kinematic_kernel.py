@@ -129,8 +129,8 @@ def driven_rotation(phi, w, a, reverse, K):
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
     acc) and the load torque into ``out``: the tight span is the one the driver pulls for the
-    direction of the transmitted torque (chainmodel.models.span_roles), and the reported span and link
-    tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
+    direction of the transmitted torque (chainmodel.models.span_roles), and the reported span
+    and link tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
     force not (KinematicModel.evaluate). True when every output is finite."""
     rev = speed < 0.0
     phi2, w2, a2, ratio, length = driven_rotation(angle, speed, acc, rev, K)

@@ -18,7 +18,10 @@ role cannot flip with the tension oscillation inside a tooth period (near a tors
 resonance the instantaneous larger tension alternates between the spans every cycle, which
 is why the old "larger tension" rule mixed the load with the oscillation). It changes only
 when the inputs reverse the transmitted torque: that is its hysteresis. At M = 0 exactly the
-span the driver winds on is tight (the upper one forward, the lower one in reverse).
+span the driver winds on is tight (the upper one forward, the lower one in reverse). J_2 is
+the driven side's inertia as each level has it (levels 1-2: with the wrapped chain's share,
+``torsional.chain_inertia``; levels 0 and 3: ``driven.inertia``); it matters only while the
+inputs accelerate and the load and damping torques are small.
 
 Compiled with the kernels that call it (levels 0-3); :func:`lower_tight_many` is the
 vectorised twin.
