@@ -5,7 +5,7 @@ The stress matrix of the issue - teeth 6-120, span pitches N 1-200, pitch fracti
 1e-6-0.1 s, every solver - at each of levels 0, 1, 2: every case ends either in a stable,
 physically plausible result or in a ValueError that names the parameter. Plausible means
 (:func:`check_plausible`): every output finite; both span tensions >= the centrifugal tension
-rho A v^2 >= 0 and the tight one the larger; over whole tooth periods of the steady window the
+rho A v^2 >= 0 (the tight one is the span the power flow names, not the larger: issue 21); over whole tooth periods of the steady window the
 driven sprocket turns exactly n_driver / n_driven per driver turn; with every damper off the
 motion does not grow. The numbers checked come from physics (the tooth ratio, rho A v^2, a
 torque balance, a symmetry), not from earlier runs.
@@ -49,7 +49,9 @@ def check_plausible(r, ratio_tol: float, undamped: bool = False) -> None:
     tight, slack = r["tight_span.tension"], r["slack_span.tension"]
     c = rho_v2(sc, r["driver.speed"])
     assert np.all(slack >= c * (1 - 1e-12) - 1e-9), "a span below the centrifugal tension"
-    assert np.all(tight >= slack), "the slack span labelled tight"
+    # span roles follow the power flow (models/span_roles.py), not the momentary size: in a
+    # transient the tight span may carry less than the slack one for a while
+    assert np.all(tight >= c * (1 - 1e-12) - 1e-9), "a span below the centrifugal tension"
     mask = steady_window(r.time, sc.operating.ramp_time, r.time[-1])
     phi1, phi2 = r["driver.angle"][mask], r["driven.angle"][mask]
     d = sc.drive
@@ -181,7 +183,9 @@ def test_load_step(level):
     out = [st.advance(float(t), source) for t in times]
     tight = np.array([o["tight_span.tension"] for o in out])
     slack = np.array([o["slack_span.tension"] for o in out])
-    assert np.all(np.isfinite(tight)) and np.all(slack >= 0) and np.all(tight >= slack)
+    # (the start's transient swings the driven sprocket against the chain: the tight span,
+    # named by the power flow, carries less than the slack one for a few ms there)
+    assert np.all(np.isfinite(tight)) and np.all(slack >= 0) and np.all(tight >= 0)
     late = times > 0.2
     diff = np.mean(tight[late] - slack[late]) * sc.drive.driven.pitch_radius
     assert diff == pytest.approx(60.0, rel=0.03)
@@ -359,8 +363,8 @@ def test_item7_pretension_means_the_same_static_tension_at_levels_0_2_and_3():
 def test_item8_reverse_rotation_labels_the_tight_span_true(level):
     """-120 rpm with +43.2 N.m: the load now assists the motion (overrunning) and the upper
     span carries it; with -43.2 N.m it resists and the lower span (the one the driver winds on
-    backwards) does. Either way tight_span is the span with the larger tension, and its
-    length is that span's. (Was: slack 1110 N labelled tight 104 N.)"""
+    backwards) does. Either way tight_span is that physical span (models/span_roles.py), and
+    its length is that span's. (Was: slack 1110 N labelled tight 104 N.)"""
     for load in (43.2, -43.2):
         r = chainmodel.simulate("xu2010", fidelity=level, input_speed_rpm=-120, load_torque=load,
                                 duration=0.12 if level == 3 else 0.2, output_interval=5e-4)

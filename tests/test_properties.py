@@ -12,7 +12,7 @@ CI) with modest example counts.
   tensions run backwards against a mirrored load are the forward ones (no gravity);
 * exact against approximate kinematics within seed 000 section 4.4's bounds (position 0.5 %,
   velocity 0.1 % with the corrected eq 51, acceleration 10 %) for n, N > 12;
-* levels 1-2 on short runs: no NaN, tensions >= the centrifugal tension >= 0, tight >= slack;
+* levels 1-2 on short runs: no NaN, tensions >= the centrifugal tension >= 0, the larger span tension is the largest link tension (span roles follow the power flow);
   level 3 on shorter runs: no NaN, span tensions and the smallest link tension >= 0 (a link
   carries no compression).
 """
@@ -195,7 +195,10 @@ def test_short_runs_are_finite_and_never_push(level):
         v = sc.drive.n_driver * sc.drive.pitch * r["driver.speed"] / (2 * math.pi)
         c = sc.parameters["chain.link_mass"] / sc.drive.pitch * v * v
         assert np.all(r["slack_span.tension"] >= c * (1 - 1e-12) - 1e-9)
-        assert np.all(r["tight_span.tension"] >= r["slack_span.tension"])
+        # span roles follow the power flow, not the momentary size (models/span_roles.py):
+        # the larger of the two span tensions is still the chain's largest link tension
+        np.testing.assert_allclose(np.maximum(r["tight_span.tension"], r["slack_span.tension"]),
+                                   r["chain.max_link_tension"], rtol=1e-12)
 
     check()
 

@@ -19,7 +19,7 @@ eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static s
 seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
 A span cannot push: if one tension would be negative it is zero and the other carries the whole
 torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
-torques), and the tight span is the one with the larger tension (docs/stability.md).
+torques), and the tight span is the one the power flow names (models/span_roles.py).
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from . import limits
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension,
                    check_pretension, quasi_static_extras)
 from .kinematic_kernel import level0_outputs
+from .span_roles import lower_tight_many
 from .static_tension import (loose_chain_error, pretension_error,  # noqa: F401  (re-exported)
                              seat_series_compliance, seat_stiffness, seated_tension,
                              static_span_tension)
@@ -159,9 +160,9 @@ class KinematicModel(Model):
                                          g.lower.arm_end, load)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
-            # the tight span is the one with the larger tension (ties: the one the driver
-            # winds on); under an overrunning load that is the span the driven sprocket pulls
-            upper = (t_up > t_low) | ((t_up == t_low) & (not rev))
+            # span roles by power flow, from the inputs (chainmodel.models.span_roles)
+            upper = ~lower_tight_many(torque[sel], p["driven.damping"], p["driven.inertia"],
+                                      drive.tooth_ratio, speed[sel], acceleration[sel])
             out["driver.angle"][sel] = angle[sel]
             out["driver.speed"][sel] = speed[sel]
             out["driven.angle"][sel] = rot.driven_angle

@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from .spans import jit, span_geometry
+from .span_roles import lower_tight
 
 __all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "K_SIZE", "C_SIZE"]
 
@@ -127,9 +128,9 @@ def driven_rotation(phi, w, a, reverse, K):
 @jit
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
-    acc) and the load torque into ``out``: the tight span is the one with the larger tension
-    (ties: the upper span forward, the lower in reverse), and the reported span and link
-    tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
+    acc) and the load torque into ``out``: the tight span is the one the driver pulls for the
+    direction of the transmitted torque (chainmodel.models.span_roles), and the reported span
+    and link tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
     force not (KinematicModel.evaluate). True when every output is finite."""
     rev = speed < 0.0
     phi2, w2, a2, ratio, length = driven_rotation(angle, speed, acc, rev, K)
@@ -150,7 +151,7 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
         t_low = -load / low_end
         t_up = 0.0
     tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
-    if t_up > t_low or (t_up == t_low and not rev):
+    if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc):
         tight = t_up
         slack = t_low
         length = g[0]

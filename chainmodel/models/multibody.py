@@ -50,6 +50,7 @@ from ..kinematics import fourbar as fb
 from ..kinematics.wrapping import chain_geometry, roller_positions
 from . import multibody_kernels as K
 from .base import Inputs, Model, SimulationDiverged
+from .span_roles import lower_tight_many
 from .spans import geometry_constants, span_geometry
 
 __all__ = ["MultibodyModel", "flank_geometry"]
@@ -505,8 +506,11 @@ class MultibodyModel(Model):
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
         d["tight_span.tension"] = ("axial force of the tight-span link whose midpoint is nearest "
-                                   "the middle of the span's line (the span whose middle link "
-                                   "carries the larger force)")
+                                   "the middle of the span's line; the tight span is the physical "
+                                   "span the driver pulls for the sign of the transmitted torque "
+                                   "(upper when load.torque + ratio (driven damping x input speed "
+                                   "+ driven inertia x input acceleration) > 0, else lower), "
+                                   "whatever the momentary forces")
         d["slack_span.tension"] = ("axial force of the slack-span link whose midpoint is nearest "
                                    "the middle of the span's line (the other span)")
         d["tight_span.length"] = ("distance between the tight span's endpoint rollers (the last "
@@ -574,8 +578,9 @@ class MultibodyModel(Model):
         phi2, w2 = x[1], x[n + 1]
         reverse = u.speed < 0
         tension = self.ws.tension
-        # the tight span carries the larger tension (ties: the one the driver winds on)
-        lower = tension[low[0]] > tension[up[0]] or (tension[low[0]] == tension[up[0]] and reverse)
+        # span roles by power flow, from the inputs (chainmodel.models.span_roles)
+        lower = bool(lower_tight_many(u.torque, self.P[K.I_C2], self.P[K.I_I2],
+                                      self.drive.tooth_ratio, u.speed, u.acceleration))
         tight, slack = (low, up) if lower else (up, low)
         centre_from = self._centres[0] if lower else self._centres[1]
         _, a, b = tight

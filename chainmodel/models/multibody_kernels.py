@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from .._numba import ENABLED, enabled, njit
+from .span_roles import lower_tight
 from .outputs import OUTPUT_NAMES  # noqa: F401  (re-exported: MultibodyModel reads it here)
 from .outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
                       O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
@@ -628,11 +629,9 @@ def _outputs_loops(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dis
     rigid = P[I_RIGID] != 0.0
     phi1 = tau if rigid else q[0]
     w1 = tau_d if rigid else v[0]
-    # the tight span carries the larger tension (ties: the one the driver winds on; under an
-    # overrunning load it is the one the driven sprocket pulls)
-    t_up = tension[spans[0, 0]]
-    t_low = tension[spans[1, 0]]
-    t_span = 1 if (t_low > t_up or (t_low == t_up and reverse)) else 0
+    # span roles by power flow, from the inputs (chainmodel.models.span_roles); ``reverse``
+    # is kept in the signature for the callers
+    t_span = 1 if lower_tight(load, P[I_C2], P[I_I2], tooth_ratio, tau_d, tau_dd) else 0
     s_span = 1 - t_span
     a = spans[t_span, 1]
     b = spans[t_span, 2]

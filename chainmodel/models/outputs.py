@@ -27,11 +27,14 @@ CORE_OUTPUTS: tuple[OutputSpec, ...] = (
     OutputSpec("input_shaft.torque", "N.m",
                "torque the drive takes from the input shaft (feed back to the motor)"),
     OutputSpec("tight_span.tension", "N",
-               "tension of the tight span, the one carrying the larger tension (with a load that "
-               "resists the motion the span the driver pulls; with an overrunning load the one "
-               "the driven sprocket pulls), centrifugal tension included"),
-    OutputSpec("slack_span.tension", "N", "tension of the other (slack) span, centrifugal "
-               "tension included"),
+               "tension of the tight span, the physical span the driver pulls for the direction "
+               "of the transmitted torque load.torque + ratio (driven damping x input speed + "
+               "driven inertia x input acceleration): the upper span (driven onto driver) when "
+               "it is positive, the lower span when negative (reverse drive against a load, "
+               "overrunning load), whatever the momentary tensions; centrifugal tension "
+               "included"),
+    OutputSpec("slack_span.tension", "N", "tension of the other (slack) physical span, "
+               "centrifugal tension included"),
     OutputSpec("tight_span.length", "m", "distance between the tight span's endpoint rollers"),
     OutputSpec("velocity_ratio", "", "driven speed / driver speed (instantaneous)"),
     OutputSpec("transmission_error", "rad",

@@ -49,6 +49,7 @@ from .outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENS
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
                     P_RHOA, P_RIGID, evaluate, jit)
+from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
            "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
@@ -471,9 +472,10 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
 @jit
 def fill_outputs(x, aux, w_in, P, Q, out):
     """The 15 outputs (ALL_OUTPUTS order) from the state x and the kernel's evaluation ``aux``
-    there; w_in the input-shaft speed (it breaks a tie between the spans' tensions). The tight
-    span is the one with the larger tension (ties: the upper span forward, the lower in
-    reverse). The reported span and link tensions include the centrifugal tension
+    there; w_in the input-shaft speed. The tight span is the one the driver pulls for the
+    direction of the transmitted torque (chainmodel.models.span_roles, decided in the kernel's
+    evaluation from the inputs: aux[A_LOWER_TIGHT]), not the one with the larger tension at
+    this instant. The reported span and link tensions include the centrifugal tension
     rho A v^2 = Q[Q_CENTRIFUGAL] w1^2 (chainmodel.models.base.centrifugal_tension); the sag and
     the seat force use the effective tension without it
     (chainmodel.models.base.quasi_static_extras). Level 1's midspan deflection is the
@@ -488,7 +490,7 @@ def fill_outputs(x, aux, w_in, P, Q, out):
     w1 = aux[A_W1]
     t_up = aux[A_T_UP]
     t_low = aux[A_T_LOW]
-    upper = t_up > t_low or (t_up == t_low and w_in >= 0.0)
+    upper = aux[A_LOWER_TIGHT] < 0.5
     if upper:
         tight = t_up
         slack = t_low

@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from .._numba import ENABLED, jit
+from .span_roles import lower_tight
 
 __all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
 
@@ -184,8 +185,9 @@ P_SIZE = 27
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
- A_EV_LS, A_EV_LE, A_MID_UP, A_MID_LOW, A_PHI1, A_W1, A_N_UP, A_N_LOW) = range(19)
-A_SIZE = 19
+ A_EV_LS, A_EV_LE, A_MID_UP, A_MID_LOW, A_PHI1, A_W1, A_N_UP, A_N_LOW,
+ A_LOWER_TIGHT) = range(20)
+A_SIZE = 20
 
 
 @jit
@@ -393,6 +395,9 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     aux[A_W1] = w1
     aux[A_N_UP] = nu
     aux[A_N_LOW] = nl
+    # span roles by power flow, from the inputs (chainmodel.models.span_roles)
+    aux[A_LOWER_TIGHT] = 1.0 if lower_tight(load, P[P_D2], P[P_J22], G[9] / G[10], w_in,
+                                            a_in) else 0.0
 
 
 @jit
