@@ -124,7 +124,8 @@ def parse_rows(text: str) -> list[dict]:
     for r in csv.DictReader(lines):
         out = {}
         for k, v in r.items():
-            if k in ("scene", "config", "level_name", "method", "status", "note", "span_source"):
+            if k in ("scene", "config", "level_name", "method", "status", "note", "span_source",
+                     "reference_note"):
                 out[k] = v
             elif k == "level":
                 out[k] = int(v)
@@ -148,15 +149,15 @@ class AutoChoice:
     met: bool                     # the table says the target is met
     accuracy: float
     notes: list = field(default_factory=list)
+    #: the model :func:`choose` built to check that the chosen level accepts the scene (its
+    #: scene differs from the chosen one only in solver settings, which no model reads):
+    #: simulate() runs it instead of building it again
+    model: Any = field(default=None, repr=False, compare=False)
     #: the expected error is promised (to hold within 2x) only for a drive near measured ones
     #: with the target met; otherwise False and ``why_not`` says why
     promised: bool = False
     why_not: str = ""
     neighbours: tuple = ()        # the measured scenes the expected error is the largest over
-    #: the model :func:`choose` built to check that the chosen level accepts the scene (its
-    #: scene differs from the chosen one only in solver settings, which no model reads):
-    #: simulate() runs it instead of building it again
-    model: Any = field(default=None, repr=False, compare=False)
 
     @property
     def message(self) -> str:

@@ -282,11 +282,12 @@ def band_errors(figs: dict, ref: dict, lo: dict, hi: dict) -> dict[str, dict[str
       a target only if this is within it (its error holds whichever value in the band is true);
     * ``errnom``: against the nominal reference alone, |v - ref| / scale (the old figure);
     * ``band``: the band's half-width (hi - lo) / 2 / scale, the reference's own uncertainty;
+    * ``dist``: the distance from v to the band, max(0, lo - v, v - hi) / scale (0 inside it);
 
     scale as :func:`relative_errors` (|reference|, tensions at least TENSION_FLOOR x its mean
     tight tension)."""
     floor = TENSION_FLOOR * abs(ref["mean_tight_tension"])
-    out = {"err": {}, "errnom": {}, "band": {}}
+    out = {"err": {}, "errnom": {}, "band": {}, "dist": {}}
     for k in METRICS:
         scale = abs(ref[k])
         if "tension" in k:
@@ -297,6 +298,7 @@ def band_errors(figs: dict, ref: dict, lo: dict, hi: dict) -> dict[str, dict[str
                 d[k] = math.nan
             continue
         out["err"][k] = max(abs(v - lo[k]), abs(v - hi[k])) / scale
+        out["dist"][k] = max(0.0, lo[k] - v, v - hi[k]) / scale
         out["errnom"][k] = abs(v - ref[k]) / scale
         out["band"][k] = 0.5 * (hi[k] - lo[k]) / scale
     return out
@@ -403,7 +405,8 @@ def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path 
                    "reference_warnings": len(band["warnings"]),
                    "reference_problems": len(band.get("problems", [])),
                    "band_runs": 1 + len(band["runs"]) - len(band["dropped"]),
-                   "span_source": band.get("span_source", "")}
+                   "span_source": band.get("span_source", ""),
+                   "reference_note": "; ".join(band.get("problems", []))[:300]}
             if not band["valid"]:
                 # a reference that means nothing (Result.valid False): the scene is kept in the
                 # table, marked, with no errors; fidelity="auto" never uses it as a source
@@ -427,7 +430,7 @@ def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path 
                 continue
             be = band_errors(m["figures"], ref, band["lo"], band["hi"])
             err = be["err"]
-            row.update(status="ok", note=("reference warns: " + ref_note)[:300] if ref_note else "",
+            row.update(status="ok", note="",
                        wall_per_sim_s=m["wall_per_sim_s"],
                        wall_spread=m["wall_spread"], peak_memory_mb=m["peak_memory_mb"],
                        **{f"{kind}_{k}": v for kind in be for k, v in be[kind].items()},
@@ -467,7 +470,8 @@ COLUMNS = ("scene", "config", "level", "level_name", "method", "tolerance", "ste
            "reference_problems", "band_runs",
            "span_source", *(f"ref_{k}" for k in METRICS),
            *(f"reflo_{k}" for k in METRICS), *(f"refhi_{k}" for k in METRICS),
-           *(f"band_{k}" for k in METRICS), *(f"errnom_{k}" for k in METRICS), "errnom_max",
+           *(f"band_{k}" for k in METRICS), *(f"dist_{k}" for k in METRICS),
+           *(f"errnom_{k}" for k in METRICS), "errnom_max", "reference_note",
            *(f"value_{k}" for k in METRICS), "note")
 
 
@@ -510,8 +514,9 @@ def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
             out.append("**Reference invalid** (Result.valid False at level 3): dropped from the "
                        "trade and never a source of `fidelity=\"auto\"`. " + first["note"] + "\n")
             continue
-        if first.get("note"):
-            out.append(f"*Marked*: {first['note']}\n")
+        if first.get("reference_note"):
+            out.append("*Marked: the reference runs outside level 3's validity* (never a source "
+                       "of `fidelity=\"auto\"`): " + first["reference_note"] + "\n")
         out.append("| configuration | ms per simulated s | peak MB | "
                    + " | ".join(f"{short[k]} %" for k in METRICS) + " |")
         out.append("|" + "---|" * (3 + len(METRICS)))
@@ -543,11 +548,11 @@ def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
 
 
 def headline(rows: list[dict]) -> str:
-    """Per scene and figure the best of levels 0-2 at their default stepper (rk4 tol 5e-4) and
-    level 3 at its own step: error over the band in %, (level), and the band's half-width."""
+    """Per scene and figure the best of levels 0-2 at their default stepper (level 0, rk4 tol
+    5e-4): its error over the band in %, (level), ± the band's half-width in %."""
     short = ("tight mean", "tight peak", "slack mean", "slack peak", "speed ripple",
              "torque ripple", "mesh ampl.", "TE")
-    out = ["| scene | band half-width % (largest over the figures) | "
+    out = ["| scene | band half-width %, largest | "
            + " | ".join(short) + " |", "|" + "---|" * (2 + len(METRICS))]
     default = {"0 kinematic", "1 rk4 tol 0.0005", "2 rk4 tol 0.0005"}
     for scene in dict.fromkeys(r["scene"] for r in rows):
@@ -563,8 +568,9 @@ def headline(rows: list[dict]) -> str:
                 cells.append("- (none valid)")
                 continue
             b = min(low, key=lambda r: r[f"err_{k}"])
-            cells.append(f"{100 * b[f'err_{k}']:.2g} ({b['level']})")
-        out.append(f"| {scene} | {100 * max(widths):.2g} | " + " | ".join(cells) + " |")
+            cells.append(f"{100 * b[f'err_{k}']:.2g} ({b['level']}) ±{100 * b[f'band_{k}']:.2g}")
+        mark = " (ref. warns)" if rs[0].get("reference_note") else ""
+        out.append(f"| {scene}{mark} | {100 * max(widths):.2g} | " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n"
 
 
