@@ -388,15 +388,18 @@ def measure(scene: Scene, repeats: int = 3) -> dict:
 
 
 def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path | None = None,
-              log=lambda s: None) -> list[dict]:
-    """One tidy row per scene x configuration (see the module docstring)."""
+              log=lambda s: None, uncertain=UNCERTAIN) -> list[dict]:
+    """One tidy row per scene x configuration (see the module docstring); ``uncertain``: the
+    values varied for the reference's band (() for none: the band is the nominal run)."""
     rows = []
     for spec in scenes:
         base = spec.scene()
         feats = scene_features(base)
-        band = reference_band(spec, cache_dir, log)
+        band = reference_band(spec, cache_dir, log, uncertain)
         ref, ref_cost = band["figures"], band["cost"]
-        ref_note = "; ".join(band["warnings"])
+        # what makes the result invalid first ("the result is not valid: ..."), then warnings
+        ref_note = "; ".join(sorted(band.get("problems") or band["warnings"],
+                                    key=lambda w: not w.startswith("the result is not valid")))
         for cfg in configs:
             row = {"scene": spec.name, "level": cfg.level, "level_name": FIDELITY_NAMES[cfg.level],
                    "method": cfg.method, "tolerance": cfg.tolerance,
@@ -406,11 +409,11 @@ def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path 
                    "reference_problems": len(band.get("problems", [])),
                    "band_runs": 1 + len(band["runs"]) - len(band["dropped"]),
                    "span_source": band.get("span_source", ""),
-                   "reference_note": "; ".join(band.get("problems", []))[:300]}
+                   "reference_note": ref_note[:400] if band.get("problems") else ""}
             if not band["valid"]:
                 # a reference that means nothing (Result.valid False): the scene is kept in the
                 # table, marked, with no errors; fidelity="auto" never uses it as a source
-                row.update(status="reference invalid", note=ref_note[:300])
+                row.update(status="reference invalid", note=ref_note[:400])
                 rows.append(row)
                 continue
             try:
