@@ -597,6 +597,7 @@ def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
     """Error (largest over the figures) against cost, one curve per level and one panel per
     scene; and the map of the lowest level meeting each target per scene."""
     import matplotlib
+    import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
@@ -613,17 +614,23 @@ def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
         width = max((ok[0][f"band_{k}"] for k in METRICS if math.isfinite(ok[0][f"band_{k}"])),
                     default=0.0)
         if width > 0:     # the reference's own uncertainty: nothing can be shown better
-            ax.axhspan(1e-5, width, color="0.9", zorder=0)
+            ax.axhspan(1e-3, width, color="0.9", zorder=0)
         for lv in range(4):
-            pts = sorted((r["wall_per_sim_s"], max(r["err_max"], 1e-5)) for r in rows
+            pts = sorted((r["wall_per_sim_s"], max(r["err_max"], 1e-3),
+                          max(r.get("errnom_max") or 1e-3, 1e-3)) for r in rows
                          if r["scene"] == scene and r["level"] == lv and r["status"] == "ok")
             if pts:
-                ax.loglog(*zip(*pts), "o-", color=colours[lv], label=FIDELITY_NAMES[lv])
+                x, worst, nom = zip(*pts)
+                ax.loglog(x, worst, "o-", color=colours[lv], label=FIDELITY_NAMES[lv])
+                ax.loglog(x, nom, "o", mfc="none", color=colours[lv], ms=4)
+        ax.set_ylim(1e-3, None)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         for t in targets:
             ax.axhline(t, color="0.7", lw=0.8, ls="--")
-        ax.set_title(scene, fontsize=9)
+        ax.set_title(scene + (" (ref. warns)" if ok[0].get("reference_note") else ""),
+                     fontsize=9)
         ax.set_xlabel("wall s per simulated s")
-        ax.set_ylabel("largest error over the band")
+        ax.set_ylabel("largest error: over the band (o-), nominal (o)", fontsize=8)
     for ax in list(axes.flat)[len(scenes):]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=8)
@@ -631,25 +638,31 @@ def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
     fig.savefig(pareto_path, dpi=110)
     plt.close(fig)
 
-    grid = np.full((len(scenes), len(targets)), -1.0)
-    for i, scene in enumerate(scenes):
-        for j, t in enumerate(targets):
-            ok = [r["level"] for r in rows if r["scene"] == scene and r["status"] == "ok"
-                  and r["err_max"] <= t]
-            grid[i, j] = min(ok) if ok else 4
-            if not any(r["scene"] == scene and r["status"] == "ok" for r in rows):
-                grid[i, j] = 5          # reference invalid
-    fig, ax = plt.subplots(figsize=(5.5, 0.45 * len(scenes) + 1.2))
-    ax.imshow(grid, cmap=plt.get_cmap("viridis", 6), vmin=-0.5, vmax=5.5, aspect="auto")
-    for i in range(len(scenes)):
-        for j in range(len(targets)):
-            v = int(grid[i, j])
-            ax.text(j, i, FIDELITY_NAMES[v] if v < 4 else ("none" if v == 4 else "ref. invalid"),
-                    ha="center", va="center",
-                    color="w" if v < 3 else "k", fontsize=8)
-    ax.set_xticks(range(len(targets)), [f"{100 * t:g} %" for t in targets])
-    ax.set_yticks(range(len(scenes)), scenes, fontsize=8)
-    ax.set_title("lowest level meeting the target on every figure (band counted)", fontsize=9)
+    panels = (("every figure", "err_max"), ("mean tight-span tension (sizing)",
+                                             "err_mean_tight_tension"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(9.5, 0.45 * len(scenes) + 1.4),
+                             sharey=True)
+    for ax, (what, key) in zip(axes, panels):
+        grid = np.full((len(scenes), len(targets)), -1.0)
+        for i, scene in enumerate(scenes):
+            for j, t in enumerate(targets):
+                ok = [r["level"] for r in rows if r["scene"] == scene and r["status"] == "ok"
+                      and r[key] is not None and r[key] <= t]
+                grid[i, j] = min(ok) if ok else 4
+                if not any(r["scene"] == scene and r["status"] == "ok" for r in rows):
+                    grid[i, j] = 5          # reference invalid
+        ax.imshow(grid, cmap=plt.get_cmap("viridis", 6), vmin=-0.5, vmax=5.5, aspect="auto")
+        for i in range(len(scenes)):
+            for j in range(len(targets)):
+                v = int(grid[i, j])
+                ax.text(j, i, FIDELITY_NAMES[v] if v < 4 else ("none" if v == 4
+                                                              else "ref. invalid"),
+                        ha="center", va="center", color="w" if v < 3 else "k", fontsize=8)
+        ax.set_xticks(range(len(targets)), [f"{100 * t:g} %" for t in targets])
+        ax.set_title(f"lowest level meeting the target,\n{what}, band counted", fontsize=9)
+    warned = {r["scene"] for r in rows if r.get("reference_note")}
+    axes[0].set_yticks(range(len(scenes)), [s + (" (ref. warns)" if s in warned else "")
+                                            for s in scenes], fontsize=8)
     fig.tight_layout()
     fig.savefig(map_path, dpi=110)
     plt.close(fig)
