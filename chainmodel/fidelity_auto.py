@@ -163,7 +163,7 @@ class AutoChoice:
     def message(self) -> str:
         what = ", ".join(self.figures) or "no measured figure"
         s = (f"fidelity auto: {self.config} ({FIDELITY_NAMES[self.level]}), expected error "
-             f"{100 * self.expected_error:.3g} % on {what} against a converged level 3 "
+             f"{100 * self.expected_error:.3g} % on {what} against level 3 over its uncertainty band "
              f"(target {100 * self.accuracy:g} %{'' if self.met else ', NOT met by any measured configuration'}); "
              f"source: chainmodel/data/tradeoff.csv, scene '{self.source_scene}' at distance "
              f"{self.distance:.2f}")
@@ -297,7 +297,10 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
     met = error(best) <= accuracy
     model = built[best["level"]]
     why_not = ""
-    if not in_range:
+    if not figs:
+        why_not = ("the table measures no error for " + ", ".join(outputs)
+                   + " (only level 3 computes them)")
+    elif not in_range:
         why_not = (f"its meshing frequency is {f_here:.3g} x its lowest quasi-static mode, more "
                    f"than a factor 2 outside the measured {min(span):.3g}-{max(span):.3g}")
     elif dist[source] > EXTRAPOLATION_DISTANCE:

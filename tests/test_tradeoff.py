@@ -326,6 +326,7 @@ def test_cli_fidelity_auto(capsys):
     cap = capsys.readouterr()
     data = json.loads(cap.out)
     assert data["fidelity_level"] == 3 and data["fidelity_auto"]["source_scene"]
+    assert data["fidelity_auto"]["promised"] == (data["fidelity_auto"]["why_not"] == "")
     assert "fidelity auto" in cap.err
     assert main(["run", "xu2010", "--fidelity", "1", "--accuracy", "0.1"]) == 2
     assert "--fidelity auto" in capsys.readouterr().err
