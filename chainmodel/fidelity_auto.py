@@ -163,7 +163,8 @@ class AutoChoice:
     def message(self) -> str:
         what = ", ".join(self.figures) or "no measured figure"
         s = (f"fidelity auto: {self.config} ({FIDELITY_NAMES[self.level]}), expected error "
-             f"{100 * self.expected_error:.3g} % on {what} against level 3 over its uncertainty band "
+             f"{100 * self.expected_error:.3g} % on {what} against level 3 over its "
+             f"uncertainty band "
              f"(target {100 * self.accuracy:g} %{'' if self.met else ', NOT met by any measured configuration'}); "
              f"source: chainmodel/data/tradeoff.csv, scene '{self.source_scene}' at distance "
              f"{self.distance:.2f}")
