@@ -237,9 +237,33 @@ def test_band_errors_worst_case_distance_and_half_width():
         assert e["errnom"][k] == pytest.approx(0.10)
         assert e["dist"][k] == pytest.approx(0.05)    # 110 - 105
         assert e["band"][k] == pytest.approx(0.075)
+    # no band (lo = hi = the nominal run): the worst case is the plain error, the width 0
+    flat = study.band_errors({k: 110.0 for k in keys}, ref, ref, ref)
+    assert flat["err"] == flat["errnom"] and set(flat["band"].values()) == {0.0}
     inside = study.band_errors({k: 95.0 for k in keys}, ref, lo, hi)
     assert inside["dist"]["mesh_amplitude"] == 0.0
     assert inside["err"]["mesh_amplitude"] == pytest.approx(0.10)   # to the far edge, 105
+
+
+@pytest.mark.parametrize("name, chain", [("08B fan 600 rpm", "08B"), ("16B mixer 200 rpm", "16B"),
+                                         ("C1 100 rpm", "16B"), ("xu2010 120 rpm", "10B")])
+def test_study_scenes_carry_their_own_chain_values(name, chain):
+    """Each scene of the study runs on its chain's values (chainmodel.chains), not 10B's."""
+    from chainmodel.chains import CHAIN_PARAMETERS, parameter_values
+    p = next(s for s in study.SCENES if s.name == name).scene().parameters
+    want = parameter_values(chain)
+    assert p["drive.pitch"] == pytest.approx(want["drive.pitch"])
+    # xu2010 keeps seed 003's own values and C1 seed 004 Table 2's link values (issue 21
+    # item 1); the values the band varies come from the chain on C1 too
+    if name.startswith("xu2010"):
+        keys = ()
+    elif name.startswith("C1"):
+        keys = ("contact.stiffness", "contact.seat_radius", "chain.roller_radius",
+                "chain.breaking_load")
+    else:
+        keys = CHAIN_PARAMETERS
+    for k in keys:
+        assert p[k] == pytest.approx(want[k]), k
 
 
 class _Stub:
