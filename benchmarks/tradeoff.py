@@ -1,5 +1,6 @@
-"""The measured speed-accuracy trade (issue 11): every level x stepper on eight scenes against a
-converged level-3 reference; writes the CSV that ``fidelity="auto"`` reads and the docs' tables.
+"""The measured speed-accuracy trade (issue 11): every level x stepper on twelve scenes against a
+converged level-3 reference and its uncertainty band (issue 21); writes the CSV that
+``fidelity="auto"`` reads, the docs' tables, the figures and docs/tradeoff.md's marked blocks.
 
     python benchmarks/tradeoff.py              # the study (same as `chainmodel bench tradeoff`)
     python benchmarks/tradeoff.py --fmu        # ... and the FMU cost per step at 1e-4 and 1e-3 s

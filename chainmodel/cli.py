@@ -248,7 +248,8 @@ def cmd_run(args) -> int:
         out["fidelity_auto"] = {"config": choice.config, "expected_error": choice.expected_error,
                                 "figures": list(choice.figures), "met": choice.met,
                                 "source_scene": choice.source_scene,
-                                "extrapolated": choice.extrapolated, "message": choice.message}
+                                "extrapolated": choice.extrapolated, "message": choice.message,
+                                "promised": choice.promised, "why_not": choice.why_not}
     written = []
     if args.csv:
         written.append(("time series", result.to_csv(args.csv)))

@@ -8,7 +8,12 @@ its figures move by < 0.03 % from h to h/8). For every run the study records
 * the wall time per simulated second, median of ``repeats`` warm runs (the kernels compiled
   and the model built once before), and the peak Python/numpy memory of one run (tracemalloc);
 * the relative error against the reference of the figures of :data:`METRICS`, all over the
-  steady window of :func:`chainmodel.analysis.summary.steady_window`.
+  steady window of :func:`chainmodel.analysis.summary.steady_window`, counted with the
+  reference's uncertainty band (issue 21 item 7): the reference is rerun with each value no
+  source gives (:data:`UNCERTAIN`) at x0.5 and x2, the band is the min-max of each figure over
+  those runs, and the error is the worst case over the band (:func:`band_errors`);
+* whether the reference is valid (``Result.valid``, ``Result.warnings``): a scene whose
+  reference is invalid is kept in the table as "reference invalid", without errors.
 
 A level a scene refuses (level 0 above half its lowest quasi-static mode, level 2 with a slack
 span) is recorded with status ``not valid here``, a run that fails with ``failed: ...``.
@@ -76,6 +81,8 @@ def _tight(n1, n2, links, pitch=0.015875):
                 drive_centre_distance=0.0)
 
 
+_EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
+
 #: the study's scenes; durations keep >= 4 tooth periods in the steady half of the run
 SCENES = (
     SceneSpec("xu2010 30 rpm", "xu2010", dict(input_speed_rpm=30, duration=0.8)),
@@ -91,6 +98,17 @@ SCENES = (
     SceneSpec("long centre N=60 120 rpm", "xu2010", dict(_tight(25, 17, 144), static_tension=500,
                                                         load_torque=20.0, input_speed_rpm=120,
                                                         duration=0.4)),
+    # two more chain sizes (issue 21 item 7), the example drives of examples/scenes/ with their
+    # chain's own values (chainmodel.chains): 08B 19/38 teeth 120 links (the newcomer's drive
+    # of issue 21 at 600-1300 rpm), 16B 15/30 teeth 70 links
+    SceneSpec("08B fan 600 rpm", str(_EXAMPLES / "08b_fan_1500rpm.toml"),
+              dict(input_speed_rpm=600, duration=0.4)),
+    SceneSpec("08B fan 1200 rpm", str(_EXAMPLES / "08b_fan_1500rpm.toml"),
+              dict(input_speed_rpm=1200, duration=0.3)),
+    SceneSpec("16B mixer 200 rpm", str(_EXAMPLES / "16b_mixer.toml"),
+              dict(input_speed_rpm=200, duration=0.6)),
+    SceneSpec("16B mixer 500 rpm", str(_EXAMPLES / "16b_mixer.toml"),
+              dict(input_speed_rpm=500, duration=0.4)),
 )
 
 
@@ -134,11 +152,59 @@ def level3_step(scene: Scene) -> float:
 CONFIGS = (
     Config(0, "-"),
     *(Config(lv, "rk4", tol) for lv in (1, 2) for tol in (5e-3, 5e-4, 5e-5)),
-    *(Config(lv, "rk45") for lv in (1, 2)),
+    # rk45 left out since issue 21: the issue-11 study measured the same errors as rk4 on every
+    # scene at 100-200x the cost (docs/tradeoff.md), and its rows were 3/4 of the wall time
     Config(3, "verlet", step_fraction=1.0),
     Config(3, "verlet", step_fraction=0.5),
 )
 REFERENCE = Config(3, "verlet", step_fraction=0.25)
+
+
+#: the values no source gives, each run at x0.5 and x2 for the reference's uncertainty band
+#: (issue 21 item 7): the roller-seat contact stiffness (seed 003's eq 16 level carried to the
+#: chain by a Hertz ratio, chainmodel.chains), the seat clearance contact.seat_radius -
+#: chain.roller_radius (ISO 606's minimum seating radius, a real sprocket's is larger) and the
+#: pin-bushing joint damping (the schema's assumed value)
+UNCERTAIN = (("contact.stiffness", 0.5), ("contact.stiffness", 2.0),
+             ("seat_clearance", 0.5), ("seat_clearance", 2.0),
+             ("chain.joint_damping", 0.5), ("chain.joint_damping", 2.0))
+
+
+def band_overrides(scene: Scene, name: str, factor: float) -> dict:
+    """Parameter overrides that scale the uncertain value ``name`` of ``scene`` by ``factor``.
+    The contact damping follows the contact stiffness as sqrt(factor), keeping its fraction of
+    critical damping (0.1 x 2 sqrt(k m), chainmodel.chains)."""
+    p = scene.parameters
+    if name == "seat_clearance":
+        gap = p["contact.seat_radius"] - p["chain.roller_radius"]
+        return {"contact.seat_radius": p["chain.roller_radius"] + factor * gap}
+    if name == "contact.stiffness":
+        return {"contact.stiffness": factor * p["contact.stiffness"],
+                "contact.damping": math.sqrt(factor) * p["contact.damping"]}
+    if name not in p:
+        raise ValueError(f"uncertain value {name!r} is not a parameter of scene {scene.name!r}")
+    return {name: factor * p[name]}
+
+
+def band_scene(base: Scene, name: str, factor: float) -> tuple[Scene, str]:
+    """``base`` at level 3 with the uncertain value scaled, keeping the scene's static tension
+    target; where the variant cannot reach it (a stiffer contact on a chain that wraps tightly
+    already gives more), the same assembly instead: the nominal's level-3 chain.pretension.
+    Returns the scene and a note ('' or what was kept)."""
+    over = band_overrides(base, name, factor)
+    try:
+        return base.with_overrides(over, fidelity=3), ""
+    except ValueError as exc:
+        if "static_tension" not in str(exc):
+            raise
+        pre = base.with_overrides(fidelity=3).parameters["chain.pretension"]
+        return (base.with_overrides({**over, "chain.pretension": pre}, fidelity=3),
+                f"static tension target unreachable ({str(exc).split(';')[0]}): the nominal's "
+                f"chain.pretension {pre:.4g} N kept")
+
+
+def band_label(name: str, factor: float) -> str:
+    return f"{name} x{factor:g}"
 
 
 # --- figures -------------------------------------------------------------------------------
@@ -149,11 +215,37 @@ def metrics(result) -> dict[str, float]:
     t = result.time
     mask = steady_window(t, result.scene.operating.ramp_time, float(t[-1]))
     out = {k: float(s[key]) for k, (_, key) in METRICS.items() if key is not None}
+    tight, slack, _ = span_tensions(result, mask)
+    out.update(mean_tight_tension=float(np.mean(tight)), peak_tight_tension=float(np.max(tight)),
+               mean_slack_tension=float(np.mean(slack)), peak_slack_tension=float(np.max(slack)))
     out["input_torque_ripple"] = float(np.std(result["input_shaft.torque"][mask]))
     out["transmission_error"] = float(np.std(result["transmission_error"][mask]))
     out["mesh_amplitude"] = mesh_amplitude(t[mask], result["driven.speed"][mask],
                                            float(s["meshing_frequency_hz"]))
     return out
+
+
+#: outputs of the two physical spans, if the library gives them (issue 21 item 2)
+PHYSICAL_SPANS = ("upper_span.tension", "lower_span.tension")
+
+
+def span_tensions(result, mask) -> tuple[np.ndarray, np.ndarray, str]:
+    """The tight and slack span's tension over ``mask``, each one physical span (issue 21 item
+    2: a window's mean is the mean of one physical span).
+
+    If the result has the two physical spans' outputs (:data:`PHYSICAL_SPANS`), the tight span
+    is the one of larger mean over the window (the span the driver pulls under steady forward
+    power flow) and the slack one the other; otherwise the ``tight_span`` / ``slack_span``
+    outputs are read as they are. Those are per physical span once the library names the
+    spans by their role (the driver's pull); before that they are the momentary larger and
+    smaller tension, whose means near a resonance mix the load with the oscillation
+    (docs/tradeoff.md "Per-span means"). The third value says which source was used."""
+    names = set(result.names)
+    if all(n in names for n in PHYSICAL_SPANS):
+        a, b = (np.asarray(result[n])[mask] for n in PHYSICAL_SPANS)
+        return (a, b, "physical") if np.mean(a) >= np.mean(b) else (b, a, "physical")
+    return (np.asarray(result["tight_span.tension"])[mask],
+            np.asarray(result["slack_span.tension"])[mask], "roles")
 
 
 def mesh_amplitude(t: np.ndarray, x: np.ndarray, f: float) -> float:
@@ -183,6 +275,35 @@ def relative_errors(figs: dict, ref: dict) -> dict[str, float]:
     return out
 
 
+def band_errors(figs: dict, ref: dict, lo: dict, hi: dict) -> dict[str, dict[str, float]]:
+    """Errors of ``figs`` counted with the reference's band [lo, hi] (nominal reference inside):
+
+    * ``err``: the worst case over the band, max(|v - lo|, |v - hi|) / scale - a level *meets*
+      a target only if this is within it (its error holds whichever value in the band is true);
+    * ``errnom``: against the nominal reference alone, |v - ref| / scale (the old figure);
+    * ``band``: the band's half-width (hi - lo) / 2 / scale, the reference's own uncertainty;
+    * ``dist``: the distance from v to the band, max(0, lo - v, v - hi) / scale (0 inside it);
+
+    scale as :func:`relative_errors` (|reference|, tensions at least TENSION_FLOOR x its mean
+    tight tension)."""
+    floor = TENSION_FLOOR * abs(ref["mean_tight_tension"])
+    out = {"err": {}, "errnom": {}, "band": {}, "dist": {}}
+    for k in METRICS:
+        scale = abs(ref[k])
+        if "tension" in k:
+            scale = max(scale, floor)
+        v = figs[k]
+        if not (scale > 0 and math.isfinite(v) and math.isfinite(lo[k]) and math.isfinite(hi[k])):
+            for d in out.values():
+                d[k] = math.nan
+            continue
+        out["err"][k] = max(abs(v - lo[k]), abs(v - hi[k])) / scale
+        out["dist"][k] = max(0.0, lo[k] - v, v - hi[k]) / scale
+        out["errnom"][k] = abs(v - ref[k]) / scale
+        out["band"][k] = 0.5 * (hi[k] - lo[k]) / scale
+    return out
+
+
 # --- running -------------------------------------------------------------------------------
 
 def _cache_key(scene: Scene) -> str:
@@ -193,27 +314,60 @@ def _cache_key(scene: Scene) -> str:
     return hashlib.sha1(blob.encode()).hexdigest()[:16]
 
 
-def reference_figures(spec: SceneSpec, cache_dir: Path | None = None,
-                      log=lambda s: None) -> tuple[dict, float]:
-    """The reference's figures and its wall time per simulated second, cached on disk under
-    ``cache_dir`` by a hash of the whole scene (a change of any level-3 parameter reruns it)."""
-    base = spec.scene()
+def _reference_run(base: Scene, label: str, cache_dir: Path | None, log) -> dict:
+    """Level 3 at REFERENCE's step on ``base``: figures, wall time per simulated second,
+    validity (Result.valid) and warnings; cached on disk under ``cache_dir`` by a hash of the
+    whole scene (a change of any level-3 parameter reruns it)."""
     sc = base.with_overrides(**REFERENCE.overrides(base))
     path = None
     if cache_dir is not None:
-        path = Path(cache_dir) / f"ref_{_cache_key(sc)}.json"
+        path = Path(cache_dir) / f"ref2_{_cache_key(sc)}.json"
         if path.exists():
-            data = json.loads(path.read_text())
-            return data["figures"], data["cost"]
-    log(f"{spec.name}: reference {REFERENCE.label} ...")
+            return json.loads(path.read_text())
+    log(f"{label} ...")
     wall = time.perf_counter()
     r = run_scene(sc)
-    cost = (time.perf_counter() - wall) / float(r.time[-1])
-    figs = metrics(r)
+    data = {"figures": metrics(r), "cost": (time.perf_counter() - wall) / float(r.time[-1]),
+            "valid": bool(r.valid), "warnings": list(r.warnings),
+            "problems": [p.text for p in r.problems],
+            "span_source": span_tensions(r, slice(None))[2]}
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"scene": spec.name, "figures": figs, "cost": cost}))
-    return figs, cost
+        path.write_text(json.dumps(data))
+    return data
+
+
+def reference_band(spec: SceneSpec, cache_dir: Path | None = None, log=lambda s: None,
+                   uncertain=UNCERTAIN) -> dict:
+    """The scene's reference (level 3, Verlet at h/4) and its uncertainty band: the same run
+    with each value of ``uncertain`` scaled (:func:`band_overrides`). Returns ``figures``,
+    ``cost``, ``valid``, ``warnings`` of the nominal run; ``lo`` / ``hi`` per figure, the
+    min-max over the nominal run and every valid band run; ``runs``: each band run's label,
+    figures and validity (an invalid band run is left out of the band and named in
+    ``dropped``)."""
+    base = spec.scene()
+    nominal = _reference_run(base, f"{spec.name}: reference {REFERENCE.label}", cache_dir, log)
+    runs = []
+    for name, factor in uncertain:
+        label = band_label(name, factor)
+        try:
+            sc, note = band_scene(base, name, factor)
+            d = _reference_run(sc, f"{spec.name}: band {label}", cache_dir, log)
+        except ValueError as exc:       # a variant the model refuses: out of the band, named
+            d, note = {"figures": None, "valid": False, "warnings": [str(exc)]}, ""
+        runs.append({"label": label, "note": note, **d})
+    kept = [nominal["figures"]] + [r["figures"] for r in runs if r["valid"]]
+    lo = {k: min(f[k] for f in kept) for k in METRICS}
+    hi = {k: max(f[k] for f in kept) for k in METRICS}
+    return {**nominal, "lo": lo, "hi": hi, "runs": runs,
+            "dropped": [r["label"] for r in runs if not r["valid"]]}
+
+
+def reference_figures(spec: SceneSpec, cache_dir: Path | None = None,
+                      log=lambda s: None) -> tuple[dict, float]:
+    """The nominal reference's figures and its wall time per simulated second."""
+    d = _reference_run(spec.scene(), f"{spec.name}: reference {REFERENCE.label}", cache_dir, log)
+    return d["figures"], d["cost"]
 
 
 def measure(scene: Scene, repeats: int = 3) -> dict:
@@ -234,18 +388,34 @@ def measure(scene: Scene, repeats: int = 3) -> dict:
 
 
 def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path | None = None,
-              log=lambda s: None) -> list[dict]:
-    """One tidy row per scene x configuration (see the module docstring)."""
+              log=lambda s: None, uncertain=UNCERTAIN) -> list[dict]:
+    """One tidy row per scene x configuration (see the module docstring); ``uncertain``: the
+    values varied for the reference's band (() for none: the band is the nominal run)."""
     rows = []
     for spec in scenes:
         base = spec.scene()
         feats = scene_features(base)
-        ref, ref_cost = reference_figures(spec, cache_dir, log)
+        band = reference_band(spec, cache_dir, log, uncertain)
+        ref, ref_cost = band["figures"], band["cost"]
+        # what makes the result invalid first ("the result is not valid: ..."), then warnings
+        ref_note = "; ".join(sorted(band.get("problems") or band["warnings"],
+                                    key=lambda w: not w.startswith("the result is not valid")))
         for cfg in configs:
             row = {"scene": spec.name, "level": cfg.level, "level_name": FIDELITY_NAMES[cfg.level],
                    "method": cfg.method, "tolerance": cfg.tolerance,
                    "step_fraction": cfg.step_fraction, "config": cfg.label, **feats,
-                   "reference_wall_per_sim_s": ref_cost}
+                   "reference_wall_per_sim_s": ref_cost, "reference_valid": int(band["valid"]),
+                   "reference_warnings": len(band["warnings"]),
+                   "reference_problems": len(band.get("problems", [])),
+                   "band_runs": 1 + len(band["runs"]) - len(band["dropped"]),
+                   "span_source": band.get("span_source", ""),
+                   "reference_note": ref_note[:400] if band.get("problems") else ""}
+            if not band["valid"]:
+                # a reference that means nothing (Result.valid False): the scene is kept in the
+                # table, marked, with no errors; fidelity="auto" never uses it as a source
+                row.update(status="reference invalid", note=ref_note[:400])
+                rows.append(row)
+                continue
             try:
                 sc = base.with_overrides(**cfg.overrides(base))
                 sc.check_operating_point(sc.model())
@@ -261,16 +431,22 @@ def run_study(scenes=SCENES, configs=CONFIGS, repeats: int = 3, cache_dir: Path 
                 rows.append(row)
                 log(f"{spec.name}: {cfg.label}: failed ({type(exc).__name__})")
                 continue
-            err = relative_errors(m["figures"], ref)
-            row.update(status="ok", note="", wall_per_sim_s=m["wall_per_sim_s"],
+            be = band_errors(m["figures"], ref, band["lo"], band["hi"])
+            err = be["err"]
+            row.update(status="ok", note="",
+                       wall_per_sim_s=m["wall_per_sim_s"],
                        wall_spread=m["wall_spread"], peak_memory_mb=m["peak_memory_mb"],
-                       **{f"err_{k}": v for k, v in err.items()},
+                       **{f"{kind}_{k}": v for kind in be for k, v in be[kind].items()},
                        **{f"value_{k}": m["figures"][k] for k in METRICS},
-                       **{f"ref_{k}": ref[k] for k in METRICS})
+                       **{f"ref_{k}": ref[k] for k in METRICS},
+                       **{f"reflo_{k}": band["lo"][k] for k in METRICS},
+                       **{f"refhi_{k}": band["hi"][k] for k in METRICS})
             row["err_max"] = max(v for v in err.values() if math.isfinite(v))
             rows.append(row)
+            row["errnom_max"] = max((v for v in be["errnom"].values() if math.isfinite(v)),
+                                    default=math.nan)
             log(f"{spec.name}: {cfg.label}: {m['wall_per_sim_s']:.3g} s/s, "
-                f"max error {100 * row['err_max']:.2f} %")
+                f"max error over the band {100 * row['err_max']:.2f} %")
     return rows
 
 
@@ -292,8 +468,13 @@ def cold_costs(levels=(0, 1, 2, 3), preset: str = "xu2010", duration: float = 0.
 COLUMNS = ("scene", "config", "level", "level_name", "method", "tolerance", "step_fraction",
            "status", "wall_per_sim_s", "wall_spread", "peak_memory_mb",
            *(f"err_{k}" for k in METRICS), "err_max",
-           "mesh_over_mode", "mesh_over_span", "load_over_static", "z1", "z2",
-           "reference_wall_per_sim_s", *(f"ref_{k}" for k in METRICS),
+           "mesh_over_mode", "mesh_over_span", "load_over_static", "z1", "z2", "pitch_mm",
+           "reference_wall_per_sim_s", "reference_valid", "reference_warnings",
+           "reference_problems", "band_runs",
+           "span_source", *(f"ref_{k}" for k in METRICS),
+           *(f"reflo_{k}" for k in METRICS), *(f"refhi_{k}" for k in METRICS),
+           *(f"band_{k}" for k in METRICS), *(f"dist_{k}" for k in METRICS),
+           *(f"errnom_{k}" for k in METRICS), "errnom_max", "reference_note",
            *(f"value_{k}" for k in METRICS), "note")
 
 
@@ -323,12 +504,29 @@ def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
              "mean_slack_tension": "slack mean", "peak_slack_tension": "slack peak",
              "driven_speed_ripple": "speed ripple", "input_torque_ripple": "torque ripple",
              "mesh_amplitude": "mesh ampl.", "transmission_error": "TE"}
-    out = []
+    out = ["Errors in % relative to the nominal reference (level 3, Verlet at h/4), each the "
+           "**worst case over the reference's band** (level 3 with "
+           + ", ".join(sorted({n for n, _ in UNCERTAIN})) + " at x0.5 and x2): "
+           "max(|v - lo|, |v - hi|). The row 'band half-width' is the reference's own "
+           "uncertainty (hi - lo) / 2 on the same scale: no configuration can be shown better "
+           "than it.\n"]
     for scene in dict.fromkeys(r["scene"] for r in rows):
+        first = next(r for r in rows if r["scene"] == scene)
         out.append(f"### {scene}\n")
+        if first["status"] == "reference invalid":
+            out.append("**Reference invalid** (Result.valid False at level 3): dropped from the "
+                       "trade and never a source of `fidelity=\"auto\"`. " + first["note"] + "\n")
+            continue
+        if first.get("reference_note"):
+            out.append("*Marked: the reference runs outside level 3's validity* (never a source "
+                       "of `fidelity=\"auto\"`): " + first["reference_note"] + "\n")
         out.append("| configuration | ms per simulated s | peak MB | "
                    + " | ".join(f"{short[k]} %" for k in METRICS) + " |")
         out.append("|" + "---|" * (3 + len(METRICS)))
+        ok = [r for r in rows if r["scene"] == scene and r["status"] == "ok"]
+        if ok:
+            out.append(f"| band half-width ({ok[0].get('band_runs') or '?'} runs) | | | "
+                       + " | ".join(f"{100 * ok[0][f'band_{k}']:.2g}" for k in METRICS) + " |")
         for r in (r for r in rows if r["scene"] == scene):
             if r["status"] != "ok":
                 out.append(f"| {r['config']} | {r['status']} |" + " |" * (1 + len(METRICS)))
@@ -337,7 +535,7 @@ def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
                        f"{r['peak_memory_mb']:.3g} | " + " | ".join(
                            f"{100 * r[f'err_{k}']:.2g}" for k in METRICS) + " |")
         out.append("")
-    out.append("### Cheapest configuration meeting a target on every figure\n")
+    out.append("### Cheapest configuration meeting a target on every figure (band counted)\n")
     out.append("| scene | " + " | ".join(f"{100 * t:g} %" for t in targets) + " |")
     out.append("|" + "---|" * (1 + len(targets)))
     for scene in dict.fromkeys(r["scene"] for r in rows):
@@ -352,11 +550,54 @@ def markdown(rows: list[dict], targets=(0.01, 0.05, 0.20)) -> str:
     return "\n".join(out) + "\n"
 
 
+def headline(rows: list[dict]) -> str:
+    """Per scene and figure the best of levels 0-2 at their default stepper (level 0, rk4 tol
+    5e-4): its error over the band in %, (level), ± the band's half-width in %."""
+    short = ("tight mean", "tight peak", "slack mean", "slack peak", "speed ripple",
+             "torque ripple", "mesh ampl.", "TE")
+    out = ["| scene | band half-width %, largest | "
+           + " | ".join(short) + " |", "|" + "---|" * (2 + len(METRICS))]
+    default = {"0 kinematic", "1 rk4 tol 0.0005", "2 rk4 tol 0.0005"}
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        rs = [r for r in rows if r["scene"] == scene and r["status"] == "ok"]
+        if not rs:
+            out.append(f"| {scene} | reference invalid: dropped |" + " |" * len(METRICS))
+            continue
+        widths = [rs[0][f"band_{k}"] for k in METRICS if math.isfinite(rs[0][f"band_{k}"])]
+        cells = []
+        for k in METRICS:
+            low = [r for r in rs if r["config"] in default and math.isfinite(r[f"err_{k}"])]
+            if not low:
+                cells.append("- (none valid)")
+                continue
+            b = min(low, key=lambda r: r[f"err_{k}"])
+            cells.append(f"{100 * b[f'err_{k}']:.2g} ({b['level']}) ±{100 * b[f'band_{k}']:.2g}")
+        mark = " (ref. warns)" if rs[0].get("reference_note") else ""
+        out.append(f"| {scene}{mark} | {100 * max(widths):.2g} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def update_doc_block(path: str | Path, name: str, text: str) -> bool:
+    """Replace the text between ``<!-- study:NAME -->`` and ``<!-- /study:NAME -->`` in the
+    doc at ``path`` (the study owns what is between the markers); False if there are none."""
+    path = Path(path)
+    if not path.is_file():
+        return False
+    doc = path.read_text()
+    start, end = f"<!-- study:{name} -->", f"<!-- /study:{name} -->"
+    i, j = doc.find(start), doc.find(end)
+    if i < 0 or j < i:
+        return False
+    path.write_text(doc[:i + len(start)] + "\n" + text.rstrip("\n") + "\n" + doc[j:])
+    return True
+
+
 def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
          targets=(0.01, 0.05, 0.20)) -> None:
     """Error (largest over the figures) against cost, one curve per level and one panel per
     scene; and the map of the lowest level meeting each target per scene."""
     import matplotlib
+    import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
@@ -365,16 +606,31 @@ def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
     fig, axes = plt.subplots(nrow, ncol, figsize=(4 * ncol, 3.3 * nrow), squeeze=False)
     colours = {0: "tab:blue", 1: "tab:orange", 2: "tab:green", 3: "tab:red"}
     for ax, scene in zip(axes.flat, scenes):
+        ok = [r for r in rows if r["scene"] == scene and r["status"] == "ok"]
+        if not ok:
+            ax.set_title(f"{scene}: reference invalid, dropped", fontsize=9)
+            ax.axis("off")
+            continue
+        width = max((ok[0][f"band_{k}"] for k in METRICS if math.isfinite(ok[0][f"band_{k}"])),
+                    default=0.0)
+        if width > 0:     # the reference's own uncertainty: nothing can be shown better
+            ax.axhspan(1e-3, width, color="0.9", zorder=0)
         for lv in range(4):
-            pts = sorted((r["wall_per_sim_s"], max(r["err_max"], 1e-5)) for r in rows
+            pts = sorted((r["wall_per_sim_s"], max(r["err_max"], 1e-3),
+                          max(r.get("errnom_max") or 1e-3, 1e-3)) for r in rows
                          if r["scene"] == scene and r["level"] == lv and r["status"] == "ok")
             if pts:
-                ax.loglog(*zip(*pts), "o-", color=colours[lv], label=FIDELITY_NAMES[lv])
+                x, worst, nom = zip(*pts)
+                ax.loglog(x, worst, "o-", color=colours[lv], label=FIDELITY_NAMES[lv])
+                ax.loglog(x, nom, "o", mfc="none", color=colours[lv], ms=4)
+        ax.set_ylim(1e-3, None)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         for t in targets:
             ax.axhline(t, color="0.7", lw=0.8, ls="--")
-        ax.set_title(scene, fontsize=9)
+        ax.set_title(scene + (" (ref. warns)" if ok[0].get("reference_note") else ""),
+                     fontsize=9)
         ax.set_xlabel("wall s per simulated s")
-        ax.set_ylabel("largest relative error")
+        ax.set_ylabel("largest error: over the band (o-), nominal (o)", fontsize=8)
     for ax in list(axes.flat)[len(scenes):]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=8)
@@ -382,22 +638,31 @@ def plot(rows: list[dict], pareto_path: str | Path, map_path: str | Path,
     fig.savefig(pareto_path, dpi=110)
     plt.close(fig)
 
-    grid = np.full((len(scenes), len(targets)), -1.0)
-    for i, scene in enumerate(scenes):
-        for j, t in enumerate(targets):
-            ok = [r["level"] for r in rows if r["scene"] == scene and r["status"] == "ok"
-                  and r["err_max"] <= t]
-            grid[i, j] = min(ok) if ok else 4
-    fig, ax = plt.subplots(figsize=(5.5, 0.45 * len(scenes) + 1.2))
-    ax.imshow(grid, cmap=plt.get_cmap("viridis", 5), vmin=-0.5, vmax=4.5, aspect="auto")
-    for i in range(len(scenes)):
-        for j in range(len(targets)):
-            v = int(grid[i, j])
-            ax.text(j, i, FIDELITY_NAMES[v] if v < 4 else "none", ha="center", va="center",
-                    color="w" if v < 3 else "k", fontsize=8)
-    ax.set_xticks(range(len(targets)), [f"{100 * t:g} %" for t in targets])
-    ax.set_yticks(range(len(scenes)), scenes, fontsize=8)
-    ax.set_title("lowest level meeting the target on every figure", fontsize=9)
+    panels = (("every figure", "err_max"), ("mean tight-span tension (sizing)",
+                                             "err_mean_tight_tension"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(9.5, 0.45 * len(scenes) + 1.4),
+                             sharey=True)
+    for ax, (what, key) in zip(axes, panels):
+        grid = np.full((len(scenes), len(targets)), -1.0)
+        for i, scene in enumerate(scenes):
+            for j, t in enumerate(targets):
+                ok = [r["level"] for r in rows if r["scene"] == scene and r["status"] == "ok"
+                      and r[key] is not None and r[key] <= t]
+                grid[i, j] = min(ok) if ok else 4
+                if not any(r["scene"] == scene and r["status"] == "ok" for r in rows):
+                    grid[i, j] = 5          # reference invalid
+        ax.imshow(grid, cmap=plt.get_cmap("viridis", 6), vmin=-0.5, vmax=5.5, aspect="auto")
+        for i in range(len(scenes)):
+            for j in range(len(targets)):
+                v = int(grid[i, j])
+                ax.text(j, i, FIDELITY_NAMES[v] if v < 4 else ("none" if v == 4
+                                                              else "ref. invalid"),
+                        ha="center", va="center", color="w" if v < 3 else "k", fontsize=8)
+        ax.set_xticks(range(len(targets)), [f"{100 * t:g} %" for t in targets])
+        ax.set_title(f"lowest level meeting the target,\n{what}, band counted", fontsize=9)
+    warned = {r["scene"] for r in rows if r.get("reference_note")}
+    axes[0].set_yticks(range(len(scenes)), [s + (" (ref. warns)" if s in warned else "")
+                                            for s in scenes], fontsize=8)
     fig.tight_layout()
     fig.savefig(map_path, dpi=110)
     plt.close(fig)
@@ -418,6 +683,9 @@ def add_arguments(p) -> None:
                    help="CSV written (default: the package's own, read by fidelity='auto')")
     g.add_argument("--markdown", default=str(root / "docs" / "tradeoff_results.md"),
                    help="tables written")
+    g.add_argument("--doc", default=str(root / "docs" / "tradeoff.md"),
+                   help="doc whose <!-- study:headline --> and <!-- study:run --> blocks are "
+                        "rewritten ('' for none)")
     g.add_argument("--figures", default=str(root / "docs" / "figures"),
                    help="directory of the two plots ('' for none)")
     g.add_argument("--cache-dir", default=str(Path.home() / ".cache" / "chainmodel" / "tradeoff"),
@@ -455,7 +723,8 @@ def run_cli(args) -> int:
     took = time.perf_counter() - start
     header = (f"chainmodel bench tradeoff (issue 11), {datetime.date.today()}, "
               f"{platform.machine()} {os.cpu_count()} cores, load average at start "
-              f"{load[0]:.2f}, {took:.0f} s; errors relative to level 3 verlet at h/4")
+              f"{load[0]:.2f}, {took:.0f} s; errors relative to level 3 verlet at h/4, worst "
+              f"case over its band ({', '.join(band_label(n, f) for n, f in UNCERTAIN)})")
     write_csv(rows, args.csv, header)
     md = [f"<!-- written by `chainmodel bench tradeoff`: {header} -->\n", markdown(rows)]
     if args.cold:
@@ -470,6 +739,9 @@ def run_cli(args) -> int:
         fig = Path(args.figures)
         fig.mkdir(parents=True, exist_ok=True)
         plot(rows, fig / "tradeoff_pareto.png", fig / "tradeoff_map.png")
+    if args.doc:
+        update_doc_block(args.doc, "headline", headline(rows))
+        update_doc_block(args.doc, "run", f"Last run: {header}.")
     print(markdown(rows), end="")
     log(f"wrote {args.csv} and {args.markdown} in {took:.0f} s")
     return 0
