@@ -58,7 +58,7 @@ def register_run(subparsers) -> None:
 def cmd_run(args) -> int:
     from ..models import SimulationDiverged
     from ..scene import load_scene
-    from ..simulation import simulate
+    from ..simulation import resolve, simulate
     scene_arg, fmu_arg = args.scene, args.via_fmu
     if scene_arg is None:
         # `run --via-fmu xu2010`: argparse gave the scene to --via-fmu
@@ -85,9 +85,9 @@ def cmd_run(args) -> int:
         scene = scene.with_overrides(**kw)
     choice = None
     if auto:
-        from ..fidelity_auto import choose
-        choice = choose(scene, args.outputs, args.accuracy)
-        scene = scene.with_overrides(**choice.overrides)
+        # the chosen scene and its model, built once by the choice and run as they are
+        scene, choice = resolve(scene, outputs=args.outputs, accuracy=args.accuracy,
+                                fidelity="auto")
         sys.stderr.write(f"chainmodel: {choice.message}\n")
     # before anything is allocated (scene.times() alone is 8 bytes a sample), FMU runs too
     from ..run_memory import check_run_memory
@@ -113,7 +113,8 @@ def cmd_run(args) -> int:
         n = len(scene.times())
         snapshot_every = max(1, math.ceil(n / 2000)) if args.plot and scene.fidelity >= 1 else 0
         try:
-            result = simulate(scene, progress=progress, snapshot_every=snapshot_every)
+            result = simulate(scene, progress=progress, snapshot_every=snapshot_every,
+                              choice=choice)
         except SimulationDiverged:
             if progress:
                 sys.stderr.write("\n")     # end the progress line the run left open
