@@ -81,3 +81,16 @@ def test_auto_builds_each_scene_model_and_the_drive_once(counts, monkeypatch):
     expected = collections.Counter({0: 1})
     expected.update(choice.levels_checked)
     assert built == expected
+
+
+def test_a_resolved_choice_is_run_as_it_is_and_refuses_further_overrides(counts):
+    """The CLI's path: resolve() once, print the choice, then simulate(choice=...) runs the
+    choice's scene on the model it built, without copying the scene again."""
+    from chainmodel.simulation import resolve
+    sc, choice = resolve("xu2010", fidelity="auto", **RUN)
+    counts.clear()
+    r = chainmodel.simulate(sc, choice=choice)
+    assert counts["with_overrides"] == 0
+    assert r.scene is choice.scene and r.auto_choice is choice
+    with pytest.raises(ValueError, match="resolve"):
+        chainmodel.simulate(sc, choice=choice, duration=0.02)
