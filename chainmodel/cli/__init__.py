@@ -153,6 +153,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write("chainmodel: interrupted\n")
         return 130
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
