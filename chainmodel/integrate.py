@@ -37,8 +37,9 @@ as plain Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._n
 then runs the loop below on its numpy force law). :meth:`FixedStepper._integrate` runs the same
 loop - rk4_loop's own functions, as plain Python (:mod:`chainmodel.plain_loop`) - on
 :meth:`Model.rhs`, for any model without kernels and, with ``FixedStepper.compiled = False``,
-as the twin the tests compare with: the step rule and the crossing are written once. Everything asked of a model is declared in
-:class:`~chainmodel.models.base.Model` (docs/architecture.md).
+as the twin the tests compare with: the step rule and the crossing are written once.
+Everything asked of a model is declared in :class:`~chainmodel.models.base.Model`
+(docs/architecture.md).
 """
 
 from __future__ import annotations

@@ -276,8 +276,9 @@ def _cross(t, x, h, t_end, c, G, P, W, V, aux):
     ends in V[0], V[1]), redone across the first change (docs/reduced_models.md, "Numerics"):
 
     1. a first estimate s of the change on the step's cubic Hermite dense output;
-    2. one step of the method (``_step_from``) to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
-       of every function (else s is searched again on the dense output of [t, t + sa]);
+    2. one step of the method (``_step_from``) to sa = s - eta (eta = EVENT_GAP h), whose
+       state must lie on the old side of every function (else s is searched again on the
+       dense output of [t, t + sa]);
     3. s located again on the dense output of the old side alone, (x, f) at t and at t + sa
        extrapolated past sa - the plain step's end state straddled the kink, this does not;
        if s ends up more than 4 eta past sa, back to 2;
