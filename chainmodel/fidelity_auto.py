@@ -42,7 +42,7 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
-from .models import ALL_OUTPUTS
+from .models import ALL_OUTPUTS, model_class
 from .parameters import FIDELITY_NAMES
 
 __all__ = ["AutoChoice", "choose", "scene_features", "table", "OUTPUT_FIGURES", "LEVEL3_ONLY",
@@ -76,7 +76,7 @@ DEFAULT_ACCURACY = 0.05
 EXTRAPOLATION_DISTANCE = 1.0
 
 
-def scene_features(scene) -> dict[str, float]:
+def scene_features(scene, model=None) -> dict[str, float]:
     """Dimensionless groups that place a scene among the measured ones:
 
     * ``mesh_over_mode``: meshing frequency z1 n / 60 over the lowest quasi-static mode of the
@@ -87,10 +87,13 @@ def scene_features(scene) -> dict[str, float]:
     * ``load_over_static``: the load's span tension, load torque / r_o, over T0 (above about 1
       the slack span unloads towards zero);
     * ``z1``, ``z2``: the tooth counts (polygonal action ~ 1 / z);
-    * ``pitch_mm``: the chain's pitch (the chain size: its stiffnesses, mass and clearances)."""
-    model = scene.with_overrides(fidelity=0).model()
-    pitch_mm = 1e3 * scene.drive.pitch
-    d = scene.drive
+    * ``pitch_mm``: the chain's pitch (the chain size: its stiffnesses, mass and clearances).
+
+    ``model``: the scene's level-0 model when the caller has built it (choose() does)."""
+    if model is None:
+        model = scene.with_overrides(fidelity=0).model()
+    d = model.drive
+    pitch_mm = 1e3 * d.pitch
     f_mesh = d.n_driver * abs(scene.operating.speed) / (2 * math.pi)
     f_t, f_ax = model._frequencies
     t0 = max(float(model.static_tension()), 1e-9)
@@ -158,6 +161,11 @@ class AutoChoice:
     promised: bool = False
     why_not: str = ""
     neighbours: tuple = ()        # the measured scenes the expected error is the largest over
+    #: the scene that runs: the given one with :attr:`overrides` applied, built once while
+    #: checking the level (simulate() runs it as it is)
+    scene: Any = field(default=None, repr=False, compare=False)
+    #: the levels whose model was built, in the order checked (cheapest acceptable first)
+    levels_checked: tuple = ()
 
     @property
     def message(self) -> str:
@@ -209,16 +217,22 @@ def validate_request(outputs, accuracy) -> tuple[tuple[str, ...], float]:
     return outputs, acc
 
 
-def _level_model(scene, level: int):
-    """The model of ``scene`` at ``level`` if that level accepts the scene's operating point,
-    else None."""
+def _level_model(scene, row, drive, level0):
+    """(scene, model) of ``scene`` with ``row``'s settings (:func:`_row_settings`) if its
+    level accepts the scene's operating point, else None. The model is built on ``drive``
+    (the geometry does not depend on the level or the solver); ``level0``: the (scene, model)
+    at level 0 already built for the features, reused when the row is level 0's."""
     try:
-        sc = scene.with_overrides(fidelity=level)
-        model = sc.model()
+        settings = _row_settings(row)
+        if settings == {"fidelity": 0}:
+            sc, model = level0
+        else:
+            sc = scene.with_overrides(**settings)
+            model = model_class(sc.fidelity)(drive, sc.parameters)
         sc.check_operating_point(model)
     except ValueError:
         return None
-    return model
+    return sc, model
 
 
 def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
@@ -236,7 +250,9 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
         notes.append("level >= 2 forced: the midspan deflection is zero below it")
     figs = tuple(dict.fromkeys(f for o in outputs
                                for f in (OUTPUT_FIGURES.get(o, ()) if o not in FIGURES else (o,))))
-    features = scene_features(scene)
+    sc0 = scene if scene.fidelity == 0 else scene.with_overrides(fidelity=0)
+    model0 = sc0.model()
+    features = scene_features(scene, model0)
     here = _log_groups(features)
     by_scene: dict[str, list] = {}
     for r in rows:
@@ -284,11 +300,13 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
         e = error(r)
         return (0, r["wall_per_sim_s"], 0.0) if e <= accuracy else (1, e, r["wall_per_sim_s"])
 
+    # a level's first row tried either is accepted (the loop ends) or its level refuses the
+    # scene, so one (scene, model) per level is built, with that row's settings
     built: dict = {}
     best = None
     for r in sorted(cands, key=rank):
         if r["level"] not in built:
-            built[r["level"]] = _level_model(scene, r["level"])
+            built[r["level"]] = _level_model(scene, r, model0.drive, (sc0, model0))
         if built[r["level"]] is not None:
             best = r
             break
@@ -296,7 +314,10 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
         raise ValueError(f"fidelity='auto' found no configuration of level >= {min_level} "
                          f"measured on '{source}' that this scene accepts")
     met = error(best) <= accuracy
-    model = built[best["level"]]
+    sc, model = built[best["level"]]
+    overrides = _overrides(sc, best, model)
+    if overrides.get("solver_step", 0.0) != sc.parameters["solver.step"]:
+        sc = sc.with_overrides(solver_step=overrides["solver_step"])
     why_not = ""
     if not figs:
         why_not = ("the table measures no error for " + ", ".join(outputs)
@@ -309,12 +330,13 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
                    f"{EXTRAPOLATION_DISTANCE:g}) in {_far_groups(here, by_scene[source][0])}")
     elif not met:
         why_not = f"no measured configuration meets {100 * accuracy:g} % there"
-    choice = AutoChoice(best["level"], _overrides(scene, best, model), best["config"],
+    choice = AutoChoice(best["level"], overrides, best["config"],
                         error(best), figs, source, dist[source], extrapolated, met, accuracy,
                         notes, model, promised=not why_not, why_not=why_not,
                         neighbours=tuple(n for n in neighbours
                                          if any(r["config"] == best["config"]
-                                                and r["status"] == "ok" for r in by_scene[n])))
+                                                and r["status"] == "ok" for r in by_scene[n])),
+                        scene=sc, levels_checked=tuple(built))
     log.info(choice.message)
     return choice
 
@@ -333,7 +355,9 @@ def _far_groups(here, row) -> str:
         or "several groups"
 
 
-def _overrides(scene, row, model=None) -> dict:
+def _row_settings(row) -> dict:
+    """The scene overrides of a table row, with the automatic step (solver_step 0) where the
+    row sets the step as a fraction of it."""
     lv = row["level"]
     out = {"fidelity": lv}
     if lv == 0:
@@ -341,13 +365,18 @@ def _overrides(scene, row, model=None) -> dict:
     out["solver_method"] = row["method"]
     if row.get("tolerance") is not None:
         out["solver_tolerance"] = row["tolerance"]
+    if row.get("step_fraction") is not None:
+        out["solver_step"] = 0.0
+    return out
+
+
+def _overrides(scene, row, model) -> dict:
+    """:func:`_row_settings` with the step fraction applied: ``scene`` and ``model`` are the
+    row's (built with the automatic step)."""
+    out = _row_settings(row)
     frac = row.get("step_fraction")
-    if frac is not None:
-        if frac == 1.0:
-            out["solver_step"] = 0.0          # level 3's own step
-        else:
-            sc = scene.with_overrides(fidelity=lv, solver_method=row["method"], solver_step=0.0)
-            out["solver_step"] = float(sc.stepper(model).h) * frac
+    if frac is not None and frac != 1.0:      # 1.0: level 3's own step
+        out["solver_step"] = float(scene.stepper(model).h) * frac
     return out
 
 

@@ -23,7 +23,7 @@ the rest of the communication step split again when it shrank (the stable-step g
 explicit ``solver.step`` is used as given, and refused - at construction or when the state
 changes - when it is above the stability limit. Every stepper stops on the
 model's switching functions (a span going slack...): the fixed-step methods locate the first
-sign change in a step on its dense output and step across it (:meth:`FixedStepper._cross`),
+sign change in a step on its dense output and step across it (``rk4_loop._cross``),
 the adaptive ones use scipy events, so kinks are resolved rather than smeared. Every stepper
 checks the state after each communication step: a diverging integration raises
 :class:`SimulationDiverged`, it never returns NaN, and a step that fails leaves the stepper at its
@@ -34,10 +34,12 @@ Levels 1-3 run the fixed-step loops of their kernels, a communication step with 
 one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
 for many points, ``simulate()``'s path): compiled with numba, and for levels 1-2 the same source
 as plain Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._numba`; level 3
-then runs the loops here on its numpy force law). The loops here implement the same rule on
+then runs the loop below on its numpy force law). :meth:`FixedStepper._integrate` runs the same
+loop - rk4_loop's own functions, as plain Python (:mod:`chainmodel.plain_loop`) - on
 :meth:`Model.rhs`, for any model without kernels and, with ``FixedStepper.compiled = False``,
-as the twin the tests compare with. Everything asked of a model is declared in
-:class:`~chainmodel.models.base.Model` (docs/architecture.md).
+as the twin the tests compare with: the step rule and the crossing are written once.
+Everything asked of a model is declared in :class:`~chainmodel.models.base.Model`
+(docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -52,12 +54,12 @@ from typing import Callable, ClassVar, Union
 import numpy as np
 
 from .models.base import Inputs, Model, SimulationDiverged
-# defined once, in the compiled loop of levels 1-2, and used by the Python loops here: the event
-# crossing's root tolerance and gap (relative to the step) and the loops' status codes (1
-# diverged, 2 explicit step above the stable limit, 3 the model's range left, 4 non-finite
-# outputs; multibody_kernels uses the same numbers)
+# the loops' status codes, defined once in the loop of levels 1-2 (1 diverged, 2 explicit step
+# above the stable limit, 3 the model's range left, 4 non-finite outputs; multibody_kernels
+# uses the same numbers)
 from .models.outputs import OUTPUT_NAMES
-from .models.rk4_loop import EVENT_GAP, EVENT_TOL, STATUS_OUTPUTS, STATUS_UNSTABLE
+from .models.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
+from .plain_loop import run_interval
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
            "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",
@@ -303,34 +305,6 @@ class Stepper(ABC):
 
 
 
-def _changed(g, g0) -> bool:
-    """Has any switching function changed sign (both values nonzero)?"""
-    return bool(np.any((g * g0 < 0) & (g != 0) & (g0 != 0)))
-
-
-def _dense(x0, f0, x1, f1, H, s):
-    """Dense output at s of a step from (x0, f0) at 0 to (x1, f1) at H: the cubic Hermite
-    interpolant (an extrapolation for s > H); for H = 0 the line x0 + s f0."""
-    if H == 0.0:
-        return x0 + s * f0
-    th = s / H
-    th2 = th * th
-    th3 = th2 * th
-    a = 2.0 * th3 - 3.0 * th2 + 1.0
-    return a * x0 + ((th3 - 2.0 * th2 + th) * H) * f0 + (1.0 - a) * x1 + ((th3 - th2) * H) * f1
-
-
-def _secant(lo, hi, g_lo, g_hi, g0) -> float:
-    """Earliest secant root in [lo, hi] among the functions changed between g0 and g_hi."""
-    changed = (g_hi * g0 < 0) & (g_hi != 0) & (g0 != 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        roots = lo + (hi - lo) * g_lo[changed] / (g_lo[changed] - g_hi[changed])
-    roots = roots[np.isfinite(roots)]
-    if not roots.size:
-        return 0.5 * (lo + hi)
-    return min(max(float(np.min(roots)), lo), hi)
-
-
 def stability_limit(method: str) -> float:
     """Stability interval on the imaginary axis, h * omega_max, of a fixed-step method."""
     return {"rk4": 2.0 * math.sqrt(2.0), "verlet": 2.0}[method]
@@ -402,6 +376,7 @@ class FixedStepper(Stepper):
         self._spare = np.empty_like(self.x)
         self._out = np.empty((2, len(OUTPUT_NAMES)))
         self._log = np.empty(EVENTS_PER_STEP)
+        self._log_python = np.empty(1000)
         self._empty_states = np.empty((0, self.x.size))
 
     def step_bound(self, omega: float, h_event: float = math.inf) -> float:
@@ -422,7 +397,7 @@ class FixedStepper(Stepper):
 
     #: let a model whose kernels hold the loop (``advance_held`` / ``advance_points``,
     #: :meth:`Model.has_loop_kernel`: levels 1-2 always - compiled with numba, their plain
-    #: source without - and level 3 with numba) do the stepping; False forces the loops here
+    #: source without - and level 3 with numba) do the stepping; False forces rk4_loop's loop
     #: on Model.rhs in this process (how the tests and benchmarks/reduced.py run that twin
     #: beside the kernels' loop)
     compiled: bool = True
@@ -542,180 +517,41 @@ class FixedStepper(Stepper):
                                  f"(non-finite state); try a smaller solver.step or "
                                  "solver.tolerance")
 
-    # --- Python loops (the twin of the compiled ones) -----------------------------------------
+    # --- the loop on the model interface (rk4_loop's source; chainmodel.plain_loop) ----------
     def _integrate(self, t0, t1, source):
-        """The step rule of the module docstring over [t0, t1], in Python on the model
-        interface (what the compiled loops do; tests compare them)."""
+        """The step rule of the module docstring over [t0, t1] on the model interface:
+        rk4_loop's own loop run as plain Python (:mod:`chainmodel.plain_loop`), on a copy of
+        the state so that a failure leaves the stepper where it was."""
         model = self.model
-        u0, u1 = source(t0), source(t1)
-        h_event = model.event_step(max(abs(u0.speed), abs(u1.speed)))
-        switch = model.switching_functions
-        fixed = self.fixed_step
-        t, x = t0, self.x
-        g0 = switch(t, x, u0)
-        h = 0.0
-        while t < t1:
-            w = model.omega_at(t, x, source(t))
-            if fixed:
-                if fixed * w > self.limit:
-                    raise SimulationDiverged(self._unstable_text(fixed, w, t))
-                h_max = fixed
-            else:
-                h_max = self.step_bound(w, h_event)
-            rest = t1 - t
-            if h == 0.0 or h > h_max or h > rest:
-                m = max(1.0, math.ceil(rest / h_max - 1e-9))
-                h = rest / m
-            if h >= rest * (1.0 - 1e-12):
-                t_next, h = t1, rest
-            else:
-                t_next = t + h
-            x_new = self._step(t, x, h, source)
-            g1 = switch(t_next, x_new, source(t_next)) if g0.size else g0
-            if g0.size and _changed(g1, g0):
-                x_new = self._cross(t, x, h, x_new, g0, g1, source)
-                self.stats["events"] += 1
-                g1 = switch(t_next, x_new, source(t_next))
-            t, x, g0 = t_next, x_new, g1
-            self.stats["steps"] += 1
-            # every step, as the compiled loops do (their _check): a diverging state is caught
-            # at its first unphysical step, where its cause can still be told apart
-            model.check(t, x)
+        x = self.x.copy()
+        n_switch = np.asarray(model.switching_functions(t0, x, source(t0))).size
+        log = self._log_python
+        status, steps, events, evals, t, omega = run_interval(
+            self.method, model, source, x, t0, t1, self.cfg, n_switch, log, 1 << 60)
+        self.stats["steps"] += steps
+        self.stats["events"] += events
+        self.stats["rhs_evaluations"] += evals
+        if status:
+            self._raise(int(status), float(t), float(omega), x)
+        if events:
+            if events > log.size:
+                log = np.roll(log, -(events % log.size))
+            self.event_log.extend(log[:min(events, log.size)].tolist())
         self.x = x
-
-    def _cross(self, t, x, h, x1, g0, g1, source):
-        """The state at t + h when a switching function changes sign over the step [t, t + h]
-        (x1 the plain step's end state, g0 and g1 the functions at both ends), the step redone
-        across the first change:
-
-        1. a first estimate s of the change on the step's cubic Hermite dense output;
-        2. one step to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
-           of every function (else s is searched again on the dense output of [t, t + sa]);
-        3. s located again on the dense output of the old side alone, (x, f) at t and at
-           t + sa extrapolated past sa - the plain step's end state straddled the kink, this
-           does not; if s ends up more than 4 eta past sa, back to 2;
-        4. across the change to sb = s + eta by the two one-sided slopes (the old side's f over
-           [sa, s], the new side's over [s, sb]), sb widened until its state is on the new side;
-        5. one step from sb to t + h.
-
-        No stage of the method straddles the kink (an error of order jump * h / 6, first order
-        in h), and the crossing errs by order eta^2 f' + jump * (error of s). The compiled loop
-        of levels 1-2 (models/spans.py, _cross) does the same."""
-        switch = self.model.switching_functions
-        rhs = self.model.rhs
-
-        def g(tt, xx):
-            return np.asarray(switch(tt, xx, source(tt)), float)
-
-        def f(tt, xx):
-            self.stats["rhs_evaluations"] += 1
-            return rhs(tt, xx, source(tt))
-
-        g0 = np.asarray(g0, float)
-        f0 = f(t, x)
-        tol, eta = EVENT_TOL * h, EVENT_GAP * h
-        s = self._locate(t, (x, f0, x1, f(t + h, x1), h), 0.0, h, g0, np.asarray(g1, float),
-                         g0, tol, source)
-        sa, xa, fa, ga = 0.0, x, f0, g0
-        for _pass in range(8):
-            for _it in range(20):                    # 2. to sa, on the old side
-                sa = s - eta
-                if sa <= 0.0:
-                    sa = 0.0
-                    break
-                xa = self._step(t, x, sa, source)
-                fa, ga = f(t + sa, xa), g(t + sa, xa)
-                if not _changed(ga, g0):
-                    break
-                s = self._locate(t, (x, f0, xa, fa, sa), 0.0, sa, g0, ga, g0, tol, source)
-            if sa == 0.0:
-                xa, fa, ga = x, f0, g0
-            sb = min(s + eta, h)                     # 3. on the old side's dense output
-            while True:
-                gb = g(t + sb, _dense(x, f0, xa, fa, sa, sb))
-                if _changed(gb, g0) or sb >= h:
-                    break
-                sb = min(sa + 2.0 * (sb - sa), h)
-            if not _changed(gb, g0):
-                break
-            if sb - sa <= 4.0 * eta:
-                s = _secant(sa, sb, ga, gb, g0)
-            else:
-                s = self._locate(t, (x, f0, xa, fa, sa), sa, sb, ga, gb, g0, tol, source)
-            if s - sa <= 4.0 * eta:
-                break
-        s = max(s, sa)                               # 4. across by the one-sided slopes
-        self.event_log.append(t + s)
-        eta_b = eta
-        while True:
-            sb = min(s + eta_b, h)
-            fq = f(t + sb, xa + (sb - sa) * fa)
-            xb = xa + (s - sa) * fa + (sb - s) * fq
-            if _changed(g(t + sb, xb), g0) or sb >= h:
-                break
-            eta_b *= 8.0
-        return self._step(t + sb, xb, h - sb, source) if sb < h else xb   # 5. the rest
-
-    def _locate(self, t, dense, lo, hi, g_lo, g_hi, g0, tol, source):
-        """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the
-        dense output ``_dense(*dense)``, g_lo and g_hi the functions at the ends; returns the
-        secant root in the final bracket (width ``tol``).
-
-        Safeguarded regula falsi (Illinois variant): the trial point is the earliest secant
-        root among the functions that change sign in the bracket, and an end kept twice in a
-        row has its values halved, so both ends converge; a trial outside the bracket falls
-        back to bisection. Each trial costs one evaluation of the switching functions on the
-        dense output, not a step of the method."""
-        switch = self.model.switching_functions
-        g_lo, g_hi = np.asarray(g_lo, float), np.asarray(g_hi, float)
-        f_lo, f_hi = g_lo.copy(), g_hi.copy()
-        side = 0
-        for _ in range(100):
-            if hi - lo <= tol:
-                break
-            changed = (g_hi * g0 < 0) & (g_hi != 0) & (g0 != 0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                roots = lo + (hi - lo) * f_lo[changed] / (f_lo[changed] - f_hi[changed])
-            roots = roots[np.isfinite(roots)]
-            mid = float(np.min(roots)) if roots.size else math.nan
-            margin = 1e-3 * (hi - lo)
-            if not (lo + margin <= mid <= hi - margin):
-                mid = min(max(mid, lo + margin), hi - margin) if math.isfinite(mid) else 0.5 * (lo + hi)
-            g_mid = np.asarray(switch(t + mid, _dense(*dense[:4], dense[4], mid),
-                                      source(t + mid)), float)
-            if _changed(g_mid, g0):
-                hi, g_hi, f_hi = mid, g_mid, g_mid.copy()
-                if side == -1:
-                    f_lo = 0.5 * f_lo
-                side = -1
-            else:
-                lo, g_lo, f_lo = mid, g_mid, g_mid.copy()
-                if side == 1:
-                    f_hi = 0.5 * f_hi
-                side = 1
-        return _secant(lo, hi, g_lo, g_hi, g0)
-
-    @abstractmethod
-    def _step(self, t, x, h, source) -> np.ndarray:
-        ...
 
     def _h_state(self) -> float:
         return self.h
 
 
 class RK4(FixedStepper):
-    method = "rk4"
+    """Classic RK4 (its step: rk4_loop._rk4_from)."""
 
-    def _step(self, t, x, h, source):
-        k1 = self._rhs(t, x, source)
-        k2 = self._rhs(t + h / 2, x + h / 2 * k1, source)
-        k3 = self._rhs(t + h / 2, x + h / 2 * k2, source)
-        k4 = self._rhs(t + h, x + h * k3, source)
-        return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    method = "rk4"
 
 
 class Verlet(FixedStepper):
-    """Velocity Verlet (kick-drift-kick) for models with state [q, v]."""
+    """Velocity Verlet (kick-drift-kick) for models with state [q, v] (its step:
+    rk4_loop._verlet_from)."""
 
     method = "verlet"
 
@@ -724,15 +560,6 @@ class Verlet(FixedStepper):
             raise ValueError(f"the verlet stepper needs a second-order model (state [q, v]); "
                              f"the {model.name} model is not; use rk4 or an adaptive method")
         super().__init__(model, *args, **kwargs)
-
-    def _step(self, t, x, h, source):
-        n = x.size // 2
-        q, v = x[:n], x[n:]
-        a0 = self._rhs(t, x, source)[n:]
-        v_half = v + 0.5 * h * a0
-        q1 = q + h * v_half
-        a1 = self._rhs(t + h, np.concatenate([q1, v_half]), source)[n:]
-        return np.concatenate([q1, v_half + 0.5 * h * a1])
 
 
 # --- adaptive -----------------------------------------------------------------------------------

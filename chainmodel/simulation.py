@@ -16,7 +16,7 @@ from .parameters import FIDELITY_NAMES
 from .run_memory import check_run_memory
 from .scene import Scene, load_scene
 
-__all__ = ["simulate", "Result", "run_scene"]
+__all__ = ["simulate", "Result", "run_scene", "resolve", "run_resolved"]
 
 UNITS = {o.name: o.unit for o in ALL_OUTPUTS}
 
@@ -220,7 +220,7 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,
              progress: bool = False, snapshot_every: int = 0, outputs=None, accuracy=None,
-             **overrides) -> Result:
+             choice=None, **overrides) -> Result:
     """Simulate a scene (preset name, TOML path or Scene) and return every output over time.
 
     Keyword overrides: ``fidelity`` (0-3 or kinematic/torsional/modal/multibody), ``duration``,
@@ -233,7 +233,28 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
     default 0.05) on ``outputs`` (output names such as "driven.speed", default: every measured
     figure); ``result.auto_choice`` and ``result.warnings`` say what it chose, the expected
     error and its source (chainmodel.fidelity_auto).
+
+    ``choice``: an AutoChoice that :func:`resolve` made already (the CLI prints it before the
+    run): its scene runs on the model it built, and nothing is chosen or overridden again.
     """
+    if choice is None:
+        sc, choice = resolve(scene, parameters=parameters, outputs=outputs, accuracy=accuracy,
+                             **overrides)
+    elif parameters or overrides or outputs is not None or accuracy is not None:
+        raise ValueError("simulate(choice=...) runs the choice's scene as it is; give the "
+                         "overrides, outputs and accuracy to resolve() instead")
+    else:
+        sc = choice.scene
+    return run_resolved(sc, choice, progress=progress, snapshot_every=snapshot_every)
+
+
+def resolve(scene: "str | Path | Scene", *, parameters: Mapping[str, Any] | None = None,
+            outputs=None, accuracy=None, **overrides):
+    """The first steps of one run, each handing the next what it needs: load the scene, apply
+    the overrides (one :meth:`Scene.with_overrides`), and with ``fidelity="auto"`` choose the
+    level (:func:`chainmodel.fidelity_auto.choose`, which builds the chosen scene and its
+    model once). Returns (scene, choice): the scene that runs and the AutoChoice or None.
+    Arguments as :func:`simulate`; the CLI calls this and :func:`run_resolved` too."""
     auto = isinstance(overrides.get("fidelity"), str) and \
         overrides["fidelity"].strip().lower() == "auto"
     if auto:
@@ -244,11 +265,18 @@ def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str,
     sc = load_scene(scene)
     if parameters or overrides:
         sc = sc.with_overrides(parameters=parameters, **overrides)
-    choice = None
-    if auto:
-        from .fidelity_auto import choose
-        choice = choose(sc, outputs, accuracy)
-        sc = sc.with_overrides(**choice.overrides)
+    if not auto:
+        return sc, None
+    from .fidelity_auto import choose
+    choice = choose(sc, outputs, accuracy)
+    return choice.scene, choice
+
+
+def run_resolved(sc: Scene, choice=None, *, progress: bool = False,
+                 snapshot_every: int = 0) -> Result:
+    """The rest of one run after :func:`resolve`: run ``sc`` (on the model the choice built,
+    if any: it is not built again) and wrap the result; a divergence that the drive's
+    geometry explains says so."""
     try:
         result = run_scene(sc, progress=progress, snapshot_every=snapshot_every,
                            model=None if choice is None else choice.model)

@@ -1,8 +1,10 @@
-"""Compiled fixed-step RK4 of levels 1 (torsional) and 2 (modal): the internal step rule, the
-stable-step guard, the event crossing and the outputs, over one or many communication steps in
-one call (numba; plain Python with ``CHAINMODEL_NUMBA=0``, where
-:class:`chainmodel.integrate.FixedStepper` runs the same algorithm on the model interface
-instead - tests compare the two).
+"""The fixed-step loop, written once: the internal step rule, the stable-step guard, the event
+location and crossing, and - for levels 1 (torsional) and 2 (modal), compiled on their kernel -
+the outputs, over one or many communication steps in one call (numba; the same source as plain
+Python with ``CHAINMODEL_NUMBA=0``). Every other fixed-step run (a model without kernels, level
+3 without numba, the ``FixedStepper.compiled = False`` twin) runs these functions' own source
+on the model interface (:mod:`chainmodel.plain_loop` rebinds the six names that touch the model:
+``_rhs_at``, ``_switch``, ``_omega_at``, ``_event_step``, ``_after_step``, ``_step_from``).
 
 **Inputs inside a communication step** [t0, t1]: the input-shaft angle is the cubic Hermite
 interpolant of the (angle, speed) given at both ends, its acceleration the interpolant's second
@@ -13,7 +15,7 @@ communication point.
 
 **Step rule** (docs/numerics.md). The internal step never depends on the communication step
 except that a communication step shorter than it is taken whole. With ``cfg`` from
-:meth:`chainmodel.integrate.FixedStepper.step_config`: an explicit ``solver.step`` is used as
+``chainmodel.integrate.FixedStepper.cfg`` (CF_*): an explicit ``solver.step`` is used as
 given; otherwise the step bound is
 
     h_max = min(theta / w, safety * 2 sqrt(2) / w, max_step, quarter tooth period)
@@ -81,7 +83,7 @@ STATUS_OUTPUTS = 4       # an output is not finite (its row is filled, for the m
 W_ROWS = 14     # work vectors of the state's size (see _interval)
 V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi, ga, gb
 
-# Event crossing, the same constants as chainmodel.integrate (tests check they agree): the root
+# Event crossing: the root
 # tolerance on a dense output and the gap eta between the steps on either side of an event, both
 # relative to the step h (docs/reduced_models.md, "Numerics").
 EVENT_TOL = 1e-5
@@ -133,12 +135,38 @@ def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     _rhs_at(t + h, tmp, c, G, P, k4, aux)
     for i in range(n):
         out[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    return 3
+
+
+@jit
+def _verlet_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
+    """One velocity Verlet (kick-drift-kick) step of a second-order state [q, v] with
+    k1 = f(t, x) already in ``k1`` (one new evaluation): v_half = v + h/2 a(t, x),
+    q1 = q + h v_half, v1 = v_half + h/2 a(t + h, [q1, v_half]) (velocity-dependent forces
+    see the half-step velocity). Same arguments as :func:`_rk4_from` (k3, k4 unused); the
+    loop on the model interface runs it for ``verlet`` (level 3's compiled loop is its own,
+    multibody_kernels)."""
+    n = x.size // 2
+    for i in range(n):
+        v_half = x[n + i] + 0.5 * h * k1[n + i]
+        tmp[i] = x[i] + h * v_half
+        tmp[n + i] = v_half
+    _rhs_at(t + h, tmp, c, G, P, k2, aux)
+    for i in range(n):
+        out[i] = tmp[i]
+        out[n + i] = tmp[n + i] + 0.5 * h * k2[n + i]
+    return 1
+
+
+#: the method's step from (t, x) with f(t, x) known, returning its new evaluations: RK4 in the
+#: compiled loop of levels 1-2; chainmodel.models.loop_on_model rebinds it per method
+_step_from = _rk4_from
 
 
 @jit
 def _switch(t, x, c, G, P, dx, aux, g):
     _rhs_at(t, x, c, G, P, dx, aux)
-    for i in range(6):
+    for i in range(g.size):
         g[i] = aux[A_G_UP + i]
 
 
@@ -172,7 +200,7 @@ def _dense(x0, f0, x1, f1, H, s, out):
 def _secant(lo, hi, glo, ghi, g0):
     """Earliest secant root in [lo, hi] among the functions changed between g0 and ghi."""
     best = 1.0e300
-    for i in range(6):
+    for i in range(g0.size):
         if ghi[i] * g0[i] < 0.0 and ghi[i] != 0.0 and g0[i] != 0.0:
             den = glo[i] - ghi[i]
             if den != 0.0:
@@ -189,13 +217,13 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
     """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the dense
     output :func:`_dense` (x0, f0; x1, f1; H), g_lo and g_hi the functions at the ends: safeguarded
     regula falsi (Illinois) to ``tol``, one evaluation per iteration. Returns (s, evaluations), s
-    the secant root in the final bracket (chainmodel.integrate.FixedStepper._locate)."""
+    the secant root in the final bracket."""
     gh = V[2]
     gm = V[3]
     glo = V[4]
     flo = V[5]
     fhi = V[6]
-    for i in range(6):
+    for i in range(g0.size):
         gh[i] = g_hi[i]
         glo[i] = g_lo[i]
         flo[i] = g_lo[i]
@@ -206,7 +234,7 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
         if hi - lo <= tol:
             break
         mid = 1.0e300
-        for i in range(6):
+        for i in range(g0.size):
             if gh[i] * g0[i] < 0.0 and gh[i] != 0.0 and g0[i] != 0.0:
                 den = flo[i] - fhi[i]
                 if den != 0.0:
@@ -225,7 +253,7 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
         evals += 1
         if _changed(gm, g0):
             hi = mid
-            for i in range(6):
+            for i in range(g0.size):
                 gh[i] = gm[i]
                 fhi[i] = gm[i]
                 if side == -1:
@@ -233,7 +261,7 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
             side = -1
         else:
             lo = mid
-            for i in range(6):
+            for i in range(g0.size):
                 glo[i] = gm[i]
                 flo[i] = gm[i]
                 if side == 1:
@@ -246,20 +274,20 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
 def _cross(t, x, h, t_end, c, G, P, W, V, aux):
     """The step [t, t_end] (h = t_end - t) from ``x`` (f(t, x) in W[3]) over which a switching
     function changed sign (plain step's end state and derivative in W[0], W[8], functions at both
-    ends in V[0], V[1]), redone across the first change (the algorithm of chainmodel.integrate.
-    FixedStepper._cross; docs/reduced_models.md, "Numerics"):
+    ends in V[0], V[1]), redone across the first change (docs/reduced_models.md, "Numerics"):
 
     1. a first estimate s of the change on the step's cubic Hermite dense output;
-    2. one RK4 step to sa = s - eta (eta = EVENT_GAP h), whose state must lie on the old side
-       of every function (else s is searched again on the dense output of [t, t + sa]);
+    2. one step of the method (``_step_from``) to sa = s - eta (eta = EVENT_GAP h), whose
+       state must lie on the old side of every function (else s is searched again on the
+       dense output of [t, t + sa]);
     3. s located again on the dense output of the old side alone, (x, f) at t and at t + sa
        extrapolated past sa - the plain step's end state straddled the kink, this does not;
        if s ends up more than 4 eta past sa, back to 2;
     4. across the change to sb = s + eta by the two one-sided slopes (the old side's f over
        [sa, s], the new side's over [s, sb]), sb widened until its state is on the new side;
-    5. one RK4 step from sb to t + h, its first stage on the new side.
+    5. one step from sb to t + h, its first stage on the new side.
 
-    No RK4 stage straddles the kink (that costs an error of order jump * h / 6, first order in
+    No stage straddles the kink (that costs an error of order jump * h / 6, first order in
     h), and the crossing errs by order eta^2 f' + jump * (error of s). Leaves the state at t_end
     in W[0], f there in W[8] (evaluated at t_end itself), the functions there in V[1]. Returns
     (s, evaluations)."""
@@ -293,9 +321,9 @@ def _cross(t, x, h, t_end, c, G, P, W, V, aux):
             if sa <= 0.0:
                 sa = 0.0
                 break
-            _rk4_from(t, x, sa, c, G, P, k1, k2, k3, k4, tmp, aux, xa)
+            e = _step_from(t, x, sa, c, G, P, k1, k2, k3, k4, tmp, aux, xa)
             _switch(t + sa, xa, c, G, P, fa, aux, ga)
-            evals += 4
+            evals += e + 1
             if not _changed(ga, g0):
                 break
             s, e = _locate(t, x, k1, xa, fa, sa, 0.0, sa, g0, ga, g0, tol, c, G, P, xm, tmp,
@@ -305,7 +333,7 @@ def _cross(t, x, h, t_end, c, G, P, W, V, aux):
             for i in range(n):
                 xa[i] = x[i]
                 fa[i] = k1[i]
-            for i in range(6):
+            for i in range(g0.size):
                 ga[i] = g0[i]
         # 3. on the old side's dense output, extrapolated past sa
         sb = min(s + eta, h)
@@ -345,14 +373,14 @@ def _cross(t, x, h, t_end, c, G, P, W, V, aux):
         eta_b *= 8.0
     # 5. the rest of the step
     if sb < h:
-        _rk4_from(t + sb, xb, h - sb, c, G, P, fb, k2, k3, k4, tmp, aux, xn)
+        e = _step_from(t + sb, xb, h - sb, c, G, P, fb, k2, k3, k4, tmp, aux, xn)
         _switch(t_end, xn, c, G, P, f1, aux, g1)
-        evals += 4
+        evals += e + 1
     else:
         for i in range(n):
             xn[i] = xb[i]
             f1[i] = fb[i]
-        for i in range(6):
+        for i in range(g0.size):
             g1[i] = gb[i]
     return s, evals
 
@@ -424,12 +452,11 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
     if not started:
         _switch(t, x, c, G, P, k1, aux, g0)
         evals += 1
-    speed = max(abs(c[C_W0]), abs(c[C_W1]))
-    h_event = Q[Q_EVENT_ANGLE] / speed if speed > 0.0 else math.inf
+    h_event = _event_step(c, Q)
     fixed = cfg[CF_STEP] > 0.0
     h = 0.0
     while t < t1:
-        w = omega_estimate(aux, G, P, Q)
+        w = _omega_at(t, x, aux, c, G, P, Q)
         if fixed:
             if cfg[CF_STEP] * w > cfg[CF_LIMIT]:
                 return STATUS_UNSTABLE, steps, events, evals, t, w
@@ -447,9 +474,9 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
         else:
             t_next = t + h
         # k1 = f(t, x): the previous evaluation at this (t, x), the switch at the step end
-        _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
+        e = _step_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
         _switch(t_next, xn, c, G, P, f1, aux, g1)
-        evals += 4
+        evals += e + 1
         if _changed(g1, g0):
             s, e = _cross(t, x, h, t_next, c, G, P, W, V, aux)
             evals += e
@@ -461,12 +488,33 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
         for i in range(n):
             x[i] = xn[i]
             k1[i] = f1[i]
-        for i in range(6):
+        for i in range(g0.size):
             g0[i] = g1[i]
-        for i in range(n):
-            if not math.isfinite(x[i]):
-                return STATUS_NONFINITE, steps, events, evals, t, 0.0
+        if _after_step(t, x, c, P, Q) != STATUS_OK:
+            return STATUS_NONFINITE, steps, events, evals, t, 0.0
     return STATUS_OK, steps, events, evals, t, 0.0
+
+
+@jit
+def _omega_at(t, x, aux, c, G, P, Q):
+    """The frequency of the step rule at (t, x), whose evaluation is in ``aux``."""
+    return omega_estimate(aux, G, P, Q)
+
+
+@jit
+def _event_step(c, Q):
+    """A quarter tooth period at the larger input speed of the communication step's ends."""
+    speed = max(abs(c[C_W0]), abs(c[C_W1]))
+    return Q[Q_EVENT_ANGLE] / speed if speed > 0.0 else math.inf
+
+
+@jit
+def _after_step(t, x, c, P, Q):
+    """STATUS_NONFINITE when the state after a step is not finite, else STATUS_OK."""
+    for i in range(x.size):
+        if not math.isfinite(x[i]):
+            return STATUS_NONFINITE
+    return STATUS_OK
 
 
 @jit

@@ -1,0 +1,40 @@
+"""Issue 20, item 1: the fixed-step loop is written once. The loop on the model interface
+(chainmodel.plain_loop: models without kernels, level 3 without numba, the compiled=False twin)
+runs rk4_loop's own functions - the same code objects - with only the names that touch the
+model rebound; integrate.py keeps no copy of the step rule or the event crossing."""
+
+from __future__ import annotations
+
+import pytest
+
+from chainmodel import integrate, plain_loop
+from chainmodel.models import rk4_loop
+
+SHARED = ("_interval", "_cross", "_locate", "_secant", "_dense", "_changed", "_step_bound",
+          "_rk4_from", "_verlet_from")
+HOOKS = ("_rhs_at", "_switch", "_omega_at", "_event_step", "_after_step")
+
+
+def _code(fn):
+    return getattr(fn, "py_func", fn).__code__
+
+
+@pytest.mark.parametrize("method, step", [("rk4", "_rk4_from"), ("verlet", "_verlet_from")])
+def test_the_plain_loop_runs_rk4_loops_own_code(method, step):
+    loop = plain_loop.LOOPS[method]
+    assert loop.__code__ is _code(rk4_loop._interval)
+    ns = loop.__globals__
+    for name in SHARED:
+        assert ns[name].__code__ is _code(getattr(rk4_loop, name)), name
+    assert ns["_step_from"].__code__ is _code(getattr(rk4_loop, step))
+    for name in HOOKS:      # bound to the model interface, not the levels 1-2 kernel
+        assert ns[name] is getattr(plain_loop, name), name
+    # the rebinding never leaks into the kernel module itself
+    assert rk4_loop._step_from is rk4_loop._rk4_from
+
+
+def test_integrate_keeps_no_copy_of_the_step_rule_or_the_crossing():
+    for name in ("_cross", "_locate", "_step"):
+        assert not hasattr(integrate.FixedStepper, name), name
+    for name in ("_changed", "_dense", "_secant"):
+        assert not hasattr(integrate, name), name
