@@ -6,6 +6,7 @@ from .kinematic import KinematicModel
 from .torsional import TorsionalModel
 from .modal import ModalModel
 from .multibody import MultibodyModel
+from . import torque_causality
 
 __all__ = ["ALL_OUTPUTS", "CORE_OUTPUTS", "EXTRA_OUTPUTS", "Inputs", "Model", "OutputSpec",
            "SimulationDiverged", "KinematicModel", "MODEL_CLASSES", "model_class", "build_model"]

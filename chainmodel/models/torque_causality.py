@@ -31,9 +31,24 @@ import numpy as np
 
 from ..geometry import Drive
 from .base import Inputs, Model, SimulationDiverged
+from .outputs import OutputSpec
 
 __all__ = ["TorqueCausalModel", "torque_causal_model", "steady_motor_torque",
-           "reflected_inertia"]
+           "reflected_inertia", "MOTOR_INPUT", "MOTOR_OUTPUTS"]
+
+#: the FMU's input of torque causality (read only there; 0 and unused in angle causality)
+MOTOR_INPUT = OutputSpec("motor.torque", "N.m",
+                         "torque driving the motor rotor (input_shaft.causality = torque; "
+                         "not read in angle causality)")
+#: outputs in both causalities: the far end of the input-shaft spring
+MOTOR_OUTPUTS = (
+    OutputSpec("motor.angle", "rad",
+               "motor rotor angle at the far end of the input-shaft spring (torque causality: "
+               "a state; angle causality: input_shaft.angle, which that end follows)"),
+    OutputSpec("motor.speed", "rad/s",
+               "motor rotor speed (torque causality: a state, what a speed controller reads; "
+               "angle causality: input_shaft.speed)"),
+)
 
 
 def torque_causal_model(level: int, drive: Drive, params: Mapping[str, Any]) -> "TorqueCausalModel":
