@@ -55,8 +55,9 @@ def main(argv=None) -> int:
                 current.append(body)
             else:
                 current = None
-        wrapper = [r for r in reports
-                   if any("ChainDrive.so" in ln or "finalizePython" in ln for ln in r[:4])]
+        wrapper = [r for r in reports   # the launcher, or pythonfmu's binary behind it
+                   if any(name in ln for ln in r[:4]
+                          for name in ("ChainDrive.so", "ChainDrive.pythonfmu.so", "finalizePython"))]
         print(f"valgrind ({len(reports)} reports, process exit {proc.returncode}): "
               f"{len(wrapper)} invalid access(es) inside pythonfmu's wrapper")
         for r in wrapper[:3]:

@@ -78,10 +78,12 @@ DEFAULT_EXPERIMENT = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=
 
 #: what a C/C++ host must provide (docs/fmu.md, "Hosts")
 _HOST_RECIPE = ("the ChainDrive FMU runs in the Python its host embeds: it needs Python >= 3.11 "
-                "with numpy and scipy importable (numba too, for speed); a C/C++ host must "
-                "preload that Python's libpython (LD_PRELOAD) and set PYTHONHOME (its prefix) and "
-                "PYTHONPATH (a site-packages with numpy, scipy and numba): see the Hosts section "
-                "of the FMU's documentation (docs/fmu.md)")
+                "with numpy and scipy importable (numba too, for speed); in a C/C++ host the "
+                "FMU's launcher starts the Python that built it, or the one CHAINDRIVE_PYTHON "
+                "names (a python executable or a libpython); an FMU built without the launcher "
+                "needs LD_PRELOAD (libpython), PYTHONHOME (its prefix) and PYTHONPATH (a "
+                "site-packages with numpy, scipy and numba): see the Hosts section of the FMU's "
+                "documentation (docs/fmu.md)")
 
 
 def _embedding_error(problem: str) -> ImportError:
@@ -273,8 +275,8 @@ def _wrapper_hosts_us(resources: str, model_identifier: str) -> bool:
             libc = ctypes.CDLL(None)
             libc.__cxa_atexit.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
             libc.__cxa_atexit(ctypes.cast(finalize, ctypes.c_void_p), None, None)
-        except AttributeError:   # pragma: no cover - another wrapper (not pythonfmu 0.7's)
-            pass
+        except AttributeError:   # the launcher (fmu_src/launcher) does it itself, or another
+            pass                 # wrapper than pythonfmu 0.7's
         _WRAPPERS[key] = wrapper
     return True
 
