@@ -81,6 +81,7 @@ class TorqueCausalModel(Model):
         self.level = inner.level
         self.name = inner.name
         self.preferred_method = inner.preferred_method
+        self.second_order = True
         self.tolerance_applies = inner.tolerance_applies
         self.switching_names = inner.switching_names
         p = self.params
