@@ -42,10 +42,36 @@ SOURCES = {"motor": "Motor.fmu", "chain": "ChainDrive.fmu", "load": "Load.fmu"}
 RECORDED = {("chain", "tight_span.tension"): "tension", ("chain", "motor.speed"): "speed"}
 
 
-def start_values(level: int) -> dict[str, dict]:
-    return {"motor": {"causality": "torque"},
-            "chain": {"input_shaft.causality": "torque", "fidelity": level},
-            "load": {}}
+def start_values(level: int, extra: dict | None = None) -> dict[str, dict]:
+    """Start values per FMU: the causalities, ChainDrive's fidelity, then ``extra``
+    ({fmu: {variable: value}})."""
+    values = {"motor": {"causality": "torque"},
+              "chain": {"input_shaft.causality": "torque", "fidelity": level},
+              "load": {}}
+    for fmu, more in (extra or {}).items():
+        values[fmu].update(more)
+    return values
+
+
+def parse_start(items) -> dict[str, dict]:
+    """``fmu:variable=value`` items (e.g. ``load:damping=0``) as {fmu: {variable: value}}."""
+    out: dict[str, dict] = {}
+    for item in items or ():
+        try:
+            head, value = item.split("=", 1)
+            fmu, name = head.split(":", 1)
+        except ValueError:
+            raise SystemExit(f"run_system: --start {item!r}: expected fmu:variable=value")
+        if fmu not in SOURCES:
+            raise SystemExit(f"run_system: --start {item!r}: fmu must be one of "
+                             f"{', '.join(SOURCES)}")
+        v = value.strip()
+        try:
+            parsed = int(v) if v.lstrip("-").isdigit() else float(v)
+        except ValueError:
+            parsed = v
+        out.setdefault(fmu, {})[name] = parsed
+    return out
 
 
 def build_fmus(folder: Path) -> Path:
@@ -82,19 +108,22 @@ class _Instance:
     def set_start(self, values: dict) -> None:
         for name, value in values.items():
             v = self.vars[name]
-            setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
-                      "Boolean": self.fmu.setBoolean, "String": self.fmu.setString}[v.type]
-            setter([v.valueReference], [value])
+            setter, kind = {"Real": (self.fmu.setReal, float),
+                            "Integer": (self.fmu.setInteger, int),
+                            "Boolean": (self.fmu.setBoolean, bool),
+                            "String": (self.fmu.setString, str)}[v.type]
+            setter([v.valueReference], [kind(value)])
 
 
-def run_jacobi(folder: Path, level: int, step: float, stop: float) -> dict[str, np.ndarray]:
+def run_jacobi(folder: Path, level: int, step: float, stop: float, extra=None
+               ) -> dict[str, np.ndarray]:
     """The three FMUs stepped side by side: at each communication point every output is read,
     then every input set, then every FMU stepped over ``step`` (fmpy's FMU2Slave)."""
     n = int(round(stop / step))
     rec = {label: np.empty(n + 1) for label in RECORDED.values()}
     with tempfile.TemporaryDirectory() as tmp:
         fmus = {name: _Instance(name, folder / src, Path(tmp)) for name, src in SOURCES.items()}
-        starts = start_values(level)
+        starts = start_values(level, extra)
         try:
             links = [(fmus[a], fmus[a].vr(out), fmus[b], fmus[b].vr(inp))
                      for a, out, b, inp in CONNECTIONS]
@@ -136,7 +165,8 @@ def run_jacobi(folder: Path, level: int, step: float, stop: float) -> dict[str, 
 
 # --- libcosim (libcosimpy) -------------------------------------------------------------------
 
-def run_libcosim(folder: Path, level: int, step: float, stop: float) -> dict[str, np.ndarray]:
+def run_libcosim(folder: Path, level: int, step: float, stop: float, extra=None
+                 ) -> dict[str, np.ndarray]:
     """The OSP system structure in libcosim, its base step set to ``step`` and ChainDrive's
     fidelity to ``level`` (a copy of the file)."""
     from libcosimpy.CosimEnums import CosimVariableType
@@ -159,11 +189,25 @@ def run_libcosim(folder: Path, level: int, step: float, stop: float) -> dict[str
               for s in execution.slave_infos()}
     observer = CosimObserver.create_time_series(buffer_size=n + 2)
     execution.add_observer(observer)
+
+    def reference(index, name):
+        return next(x for x in execution.slave_variables(index)
+                    if (x.name.decode() if isinstance(x.name, bytes) else x.name) == name)
+
+    for fmu, values in (extra or {}).items():
+        for name, value in values.items():
+            var = reference(slaves[fmu], name)
+            setter, kind = {CosimVariableType.REAL: (execution.real_initial_value, float),
+                            CosimVariableType.INTEGER: (execution.integer_initial_value, int),
+                            CosimVariableType.BOOLEAN: (execution.boolean_initial_value, bool),
+                            CosimVariableType.STRING: (execution.string_initial_value, str)}[
+                CosimVariableType(var.type)]
+            if not setter(slaves[fmu], var.reference, kind(value)):
+                raise RuntimeError(f"libcosim refused the start value {fmu}:{name} = {value!r}")
     refs = {}
     for (f, v), label in RECORDED.items():
         index = slaves[f]
-        vr = next(x.reference for x in execution.slave_variables(index)
-                  if (x.name.decode() if isinstance(x.name, bytes) else x.name) == v)
+        vr = reference(index, v).reference
         observer.start_time_series(index, vr, CosimVariableType.REAL)
         refs[label] = (index, vr)
     for k in range(n):
@@ -184,7 +228,7 @@ def means(rec: dict[str, np.ndarray]) -> dict[str, float]:
     return {label: float(np.mean(values[1:])) for label, values in rec.items()}
 
 
-def study(folder: Path, masters, levels, steps, stop, out=print) -> list[dict]:
+def study(folder: Path, masters, levels, steps, stop, out=print, extra=None) -> list[dict]:
     """Every master x level x step; rows with the means, their relative differences from the
     smallest step's and the wall time."""
     rows = []
@@ -194,7 +238,7 @@ def study(folder: Path, masters, levels, steps, stop, out=print) -> list[dict]:
             for step in sorted(steps):
                 wall = time.perf_counter()
                 try:
-                    m = means(MASTERS[master](folder, level, step, stop))
+                    m = means(MASTERS[master](folder, level, step, stop, extra))
                     error = None
                 except RuntimeError as exc:
                     m, error = {"tension": float("nan"), "speed": float("nan")}, str(exc)
@@ -230,10 +274,13 @@ def main(argv=None) -> int:
     ap.add_argument("--masters", nargs="+", choices=sorted(MASTERS), default=["libcosim", "jacobi"])
     ap.add_argument("--fmus", type=Path, default=None,
                     help="folder with ChainDrive.fmu, Motor.fmu, Load.fmu (built there if missing)")
+    ap.add_argument("--start", nargs="*", metavar="FMU:VARIABLE=VALUE",
+                    help="start values, e.g. load:damping=0 load:torque0=43.2")
     args = ap.parse_args(argv)
+    extra = parse_start(args.start)
     folder = build_fmus(args.fmus or HERE / "dist")
     print(HEADER)
-    rows = study(folder, args.masters, args.levels, args.steps, args.stop)
+    rows = study(folder, args.masters, args.levels, args.steps, args.stop, extra=extra)
     bad = [r for r in rows if r["error"] or max(r["d_tension"], r["d_speed"]) > 0.01]
     print(f"{len(rows) - len(bad)} of {len(rows)} runs within 1 % of the smallest step's")
     return 1 if bad else 0
