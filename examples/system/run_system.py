@@ -7,7 +7,10 @@ reads the rotor speed ChainDrive integrates (``motor.speed``) and gives the torq
 (``motor.torque``); ChainDrive (``input_shaft.causality = torque``) integrates the rotor on the
 stiff input-shaft spring inside its own stepper; the Load FMU's torque follows the driven speed.
 Every FMU sees the others' outputs of the last communication point (Jacobi; libcosim's fixed-step
-algorithm does the same).
+algorithm does the same). The load is the example Load's law 21.6 N m + 1.72 N m s/rad x driven
+speed with the speed-dependent part in ChainDrive's ``driven.damping`` (the start values of
+OspSystemStructure.xml, mirrored in :func:`start_values`); ``--start load:damping=1.7189
+load:torque0=21.6 chain:driven.damping=0`` feeds it back through the Load FMU instead.
 
     python examples/system/run_system.py                        # levels 1 and 3, both masters
     python examples/system/run_system.py --levels 1 --masters jacobi --stop 0.2
@@ -38,6 +41,10 @@ CONNECTIONS = (("motor", "torque", "chain", "motor.torque"),
                ("chain", "driven.speed", "load", "speed"),
                ("load", "torque", "chain", "load.torque"))
 SOURCES = {"motor": "Motor.fmu", "chain": "ChainDrive.fmu", "load": "Load.fmu"}
+#: the example Load's speed-dependent part [N m s/rad] (43.2 N m at 120 rpm = 21.6 + this x
+#: 12.566 rad/s), given to ChainDrive's driven.damping: integrated with the drive, not fed back
+#: through a held torque (OspSystemStructure.xml, docs/fmu.md "In a system model")
+SPLIT_DAMPING = 21.6 / 12.566370614359172
 #: what the comparison reads: (FMU, output) -> label
 RECORDED = {("chain", "tight_span.tension"): "tension", ("chain", "motor.speed"): "speed"}
 
@@ -46,8 +53,9 @@ def start_values(level: int, extra: dict | None = None) -> dict[str, dict]:
     """Start values per FMU: the causalities, ChainDrive's fidelity, then ``extra``
     ({fmu: {variable: value}})."""
     values = {"motor": {"causality": "torque"},
-              "chain": {"input_shaft.causality": "torque", "fidelity": level},
-              "load": {}}
+              "chain": {"input_shaft.causality": "torque", "fidelity": level,
+                        "driven.damping": SPLIT_DAMPING},
+              "load": {"damping": 0.0, "torque0": 21.6}}
     for fmu, more in (extra or {}).items():
         values[fmu].update(more)
     return values
