@@ -666,6 +666,7 @@ class ChainDrive(Fmi2Slave):
                 out = st.advance(current_time + step_size, self._M.Inputs(
                     0.0, 0.0, real[self._in_torque], 0.0, real[self._in_motor]))
                 row = self._output_row(out)
+                speed = st.model.motor_outputs(st.x)[1]   # the validity checks' input speed
             else:
                 row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
                                       self._acceleration(current_time, speed),

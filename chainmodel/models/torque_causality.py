@@ -204,8 +204,10 @@ class TorqueCausalModel(Model):
             raise SimulationDiverged(
                 f"motor.speed = {w:.6g} rad/s at t = {t:.6g} s is beyond the {self.name} "
                 f"model's (level {self.level}) limit of {w_max:.6g} rad/s ({why}): in torque "
-                "causality the motor runs away when motor.torque exceeds what the load takes; "
-                "check the motor torque or its speed controller")
+                "causality the rotor runs away when motor.torque exceeds what the load takes "
+                "(check the motor torque or its speed controller) or, in co-simulation, when "
+                "a speed-dependent torque fed back through a held input pumps the drive "
+                "(docs/fmu.md, In a system model)")
 
     def speed_limit_cached(self):
         b = self.__dict__.get("_speed_limit")
