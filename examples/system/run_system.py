@@ -40,6 +40,13 @@ CONNECTIONS = (("motor", "torque", "chain", "motor.torque"),
                ("chain", "motor.speed", "motor", "shaft.speed"),
                ("chain", "driven.speed", "load", "speed"),
                ("load", "torque", "chain", "load.torque"))
+#: angle causality, for comparison (Jacobi master only): the Motor FMU integrates the rotor and
+#: sends its angle and speed; ChainDrive returns the torque its input shaft takes
+CONNECTIONS_ANGLE = (("motor", "rotor.angle", "chain", "input_shaft.angle"),
+                     ("motor", "rotor.speed", "chain", "input_shaft.speed"),
+                     ("chain", "input_shaft.torque", "motor", "shaft.torque"),
+                     ("chain", "driven.speed", "load", "speed"),
+                     ("load", "torque", "chain", "load.torque"))
 SOURCES = {"motor": "Motor.fmu", "chain": "ChainDrive.fmu", "load": "Load.fmu"}
 #: the example Load's speed-dependent part [N m s/rad] (43.2 N m at 120 rpm = 21.6 + this x
 #: 12.566 rad/s), given to ChainDrive's driven.damping: integrated with the drive, not fed back
@@ -123,8 +130,8 @@ class _Instance:
             setter([v.valueReference], [kind(value)])
 
 
-def run_jacobi(folder: Path, level: int, step: float, stop: float, extra=None
-               ) -> dict[str, np.ndarray]:
+def run_jacobi(folder: Path, level: int, step: float, stop: float, extra=None,
+               causality: str = "torque") -> dict[str, np.ndarray]:
     """The three FMUs stepped side by side: at each communication point every output is read,
     then every input set, then every FMU stepped over ``step`` (fmpy's FMU2Slave)."""
     n = int(round(stop / step))
@@ -132,10 +139,16 @@ def run_jacobi(folder: Path, level: int, step: float, stop: float, extra=None
     with tempfile.TemporaryDirectory() as tmp:
         fmus = {name: _Instance(name, folder / src, Path(tmp)) for name, src in SOURCES.items()}
         starts = start_values(level, extra)
+        connections, recorded = CONNECTIONS, dict(RECORDED)
+        if causality == "angle":
+            starts["motor"]["causality"] = starts["chain"]["input_shaft.causality"] = "angle"
+            connections = CONNECTIONS_ANGLE
+            recorded = {("chain", "tight_span.tension"): "tension",
+                        ("motor", "rotor.speed"): "speed"}
         try:
             links = [(fmus[a], fmus[a].vr(out), fmus[b], fmus[b].vr(inp))
-                     for a, out, b, inp in CONNECTIONS]
-            reads = [(label, fmus[f], fmus[f].vr(v)) for (f, v), label in RECORDED.items()]
+                     for a, out, b, inp in connections]
+            reads = [(label, fmus[f], fmus[f].vr(v)) for (f, v), label in recorded.items()]
 
             def exchange():
                 values = [src.fmu.getReal([vr])[0] for src, vr, _, _ in links]
@@ -228,7 +241,8 @@ def run_libcosim(folder: Path, level: int, step: float, stop: float, extra=None
     return rec
 
 
-MASTERS = {"jacobi": run_jacobi, "libcosim": run_libcosim}
+MASTERS = {"jacobi": run_jacobi, "libcosim": run_libcosim,
+           "jacobi-angle": lambda *a: run_jacobi(*a, causality="angle")}
 
 
 def means(rec: dict[str, np.ndarray]) -> dict[str, float]:
