@@ -33,6 +33,5 @@ def build_model(level: int, drive, params) -> Model:
     the motor rotor on its input-shaft spring, :mod:`.torque_causality`)."""
     if params.get("input_shaft.causality", "angle") == "torque":
         from .torque_causality import torque_causal_model
-        model_class(level)
-        return torque_causal_model(level, drive, params)
+        return torque_causal_model(level, drive, params, model_class(level))
     return model_class(level)(drive, params)

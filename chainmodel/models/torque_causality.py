@@ -51,8 +51,10 @@ MOTOR_OUTPUTS = (
 )
 
 
-def torque_causal_model(level: int, drive: Drive, params: Mapping[str, Any]) -> "TorqueCausalModel":
-    """The level ``level`` model in torque causality, or ValueError saying why it cannot be."""
+def torque_causal_model(level: int, drive: Drive, params: Mapping[str, Any],
+                        level_class: type[Model]) -> "TorqueCausalModel":
+    """The level ``level`` model (of class ``level_class``) in torque causality, or ValueError
+    saying why it cannot be."""
     if level == 0:
         raise ValueError(
             "parameter input_shaft.causality = torque needs fidelity 1-3: at fidelity 0 "
@@ -64,8 +66,7 @@ def torque_causal_model(level: int, drive: Drive, params: Mapping[str, Any]) -> 
             "parameter input_shaft.causality = torque integrates the input-shaft spring between "
             "the motor rotor and the driver, but input_shaft.rigid = true removes that spring; "
             "set input_shaft.rigid = false or use input_shaft.causality = angle")
-    from . import model_class
-    return TorqueCausalModel(model_class(level)(drive, params))
+    return TorqueCausalModel(level_class(drive, params))
 
 
 class TorqueCausalModel(Model):
