@@ -75,14 +75,14 @@ class TorqueCausalModel(Model):
 
     def __init__(self, inner: Model):
         super().__init__(inner.drive, inner.params)
-        if inner.n_states == 0 or not inner.second_order:
-            raise ValueError(f"torque causality needs a second-order dynamic model, got the "
-                             f"{inner.name} model")
+        if inner.n_states == 0:
+            raise ValueError(f"torque causality needs a dynamic model, got the {inner.name} "
+                             "model")
         self.inner = inner
         self.level = inner.level
         self.name = inner.name
         self.preferred_method = inner.preferred_method
-        self.second_order = True
+        self.second_order = inner.second_order
         self.tolerance_applies = inner.tolerance_applies
         self.switching_names = inner.switching_names
         p = self.params
@@ -90,7 +90,11 @@ class TorqueCausalModel(Model):
         self.k_shaft = float(p["input_shaft.stiffness"])
         self.c_shaft = float(p["input_shaft.damping"])
         names = inner.state_names
-        self._h = inner.n_states // 2
+        n, h = inner.n_states, inner.n_states // 2
+        # second order [q, v]: theta_m ends q, theta_m' ends v (the layout stays [q, v]);
+        # otherwise (level 2's sprockets then span modes) both are appended
+        self._i_th, self._i_w = (h, 2 * h + 1) if inner.second_order else (n, n + 1)
+        self._inner_idx = np.array([k for k in range(n + 2) if k not in (self._i_th, self._i_w)])
         self._i_phi1 = names.index("driver.angle")
         self._i_w1 = names.index("driver.speed")
         self._inner_driver_inertia = float(reflected_inertia_parts(inner)[0])
@@ -104,23 +108,23 @@ class TorqueCausalModel(Model):
     # --- state layout -------------------------------------------------------------------------
     @property
     def state_names(self) -> tuple[str, ...]:
-        n, h = self.inner.state_names, self._h
-        return tuple(n[:h]) + ("motor.angle",) + tuple(n[h:]) + ("motor.speed",)
+        return tuple(self.join(np.array(self.inner.state_names, object), "motor.angle",
+                               "motor.speed").tolist())
 
     def split(self, x):
         """(the wrapped model's state, theta_m, theta_m') of a state x."""
-        h = self._h
         x = np.asarray(x, float)
-        return np.concatenate((x[:h], x[h + 1:2 * h + 1])), float(x[h]), float(x[2 * h + 1])
+        return x[self._inner_idx], float(x[self._i_th]), float(x[self._i_w])
 
     def join(self, xi, theta_m, w_m) -> np.ndarray:
-        h = self._h
-        return np.concatenate((xi[:h], [theta_m], xi[h:], [w_m]))
+        x = np.empty(len(xi) + 2, np.asarray(xi).dtype)
+        x[self._inner_idx] = xi
+        x[self._i_th], x[self._i_w] = theta_m, w_m
+        return x
 
     def motor_outputs(self, x) -> tuple[float, float]:
         """(motor.angle [rad], motor.speed [rad/s]) of state x."""
-        h = self._h
-        return float(x[h]), float(x[2 * h + 1])
+        return float(x[self._i_th]), float(x[self._i_w])
 
     def _inner_inputs(self, x, u: Inputs):
         xi, th, w = self.split(x)
@@ -142,14 +146,8 @@ class TorqueCausalModel(Model):
     def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
         xi, ui = self._inner_inputs(x, u)
         dxi = self.inner.rhs(t, xi, ui)
-        h = self._h
         ts = self.k_shaft * (ui.angle - xi[self._i_phi1]) + self.c_shaft * (ui.speed - xi[self._i_w1])
-        dx = np.empty(2 * h + 2)
-        dx[:h] = dxi[:h]
-        dx[h] = ui.speed
-        dx[h + 1:2 * h + 1] = dxi[h:]
-        dx[2 * h + 1] = (u.motor_torque - ts) / self.j_motor
-        return dx
+        return self.join(dxi, ui.speed, (u.motor_torque - ts) / self.j_motor)
 
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
         xi, ui = self._inner_inputs(x, u)
