@@ -124,6 +124,8 @@ def library_metadata() -> dict:
 
     units = {o.name: o.unit or "1" for o in ALL_OUTPUTS}
     units.update({"input_shaft.angle": "rad", "input_shaft.speed": "rad/s", "load.torque": "N.m"})
+    from chainmodel.models.torque_causality import MOTOR_INPUT, MOTOR_OUTPUTS
+    units.update({o.name: o.unit for o in (MOTOR_INPUT, *MOTOR_OUTPUTS)})
     from chainmodel.fidelity_auto import FMU_UNITS    # the adapter's auto.* parameters
     units.update(FMU_UNITS)
     display = dict(SPEED_DISPLAY)
@@ -154,6 +156,7 @@ def library_metadata() -> dict:
             text += ("; quasi-static estimate at fidelity " + ", ".join(map(str, q))
                      + (", computed at " + ", ".join(map(str, computed)) if computed else ""))
         notes[o.name] = text
+    notes.update({o.name: f"{o.description} [{o.unit}]" for o in MOTOR_OUTPUTS})
     return {"units": units, "display": display, "output_notes": notes, "levels": levels,
             "names": P.FIDELITY_NAMES, "version": chainmodel.__version__,
             "parameters": {p.name: p for p in P.PARAMETERS}}

@@ -87,7 +87,10 @@ def _extracted(fmu_path: Path) -> str:
 
 def _value_refs(md):
     by_name = {v.name: v for v in md.modelVariables}
-    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    # the library's outputs (run_scene's columns); motor.angle and motor.speed are for masters
+    from .models import ALL_OUTPUTS
+    known = {o.name for o in ALL_OUTPUTS}
+    outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.name in known]
     return by_name, outputs
 
 
@@ -190,6 +193,11 @@ class FMUSession:
         from .simulation import Result, _Progress
 
         sc = load_scene(scene)
+        if sc.parameters["input_shaft.causality"] != "angle":
+            raise ValueError("simulate_fmu drives the FMU's input shaft (angle causality); "
+                             "parameter input_shaft.causality = torque needs a master that sets "
+                             "motor.torque (examples/system/run_system.py); the library runs it "
+                             "with chainmodel.simulate")
         by_name, outputs, logger = self.by_name, self.outputs, self.logger
         missing = [n for n in sc.parameters if n not in by_name]
         if missing:

@@ -198,6 +198,17 @@ PARAMETERS: tuple[Parameter, ...] = (
        "driver inertia on the shaft spring)", minimum=0.0, levels=(1, 2, 3)),
     _p("input_shaft.rigid", False, "", "couple the driver rigidly to the input-shaft angle",
        kind=bool, levels=(1, 2, 3)),
+    _p("input_shaft.causality", "angle", "",
+       "what drives the input shaft: angle (inputs input_shaft.angle and speed, the far end of "
+       "the shaft spring follows them) or torque (input motor.torque drives a motor rotor of "
+       "motor.inertia at the far end of the shaft spring, integrated with the drive; "
+       "docs/fmu.md, In a system model)", kind=str, choices=("angle", "torque"),
+       levels=(1, 2, 3)),
+    _p("motor.inertia", 0.01, "kg.m2",
+       "moment of inertia of the motor rotor at the far end of the input-shaft spring, used "
+       "with input_shaft.causality = torque (not in the seeds: the 0.01 kg m2 rotor of issue "
+       "18's system example; give your motor's)", minimum=0.0, exclusive_minimum=True,
+       levels=(1, 2, 3)),
     # environment
     _p("gravity", 9.81, "m/s2", "gravitational acceleration (acts on the chain)", minimum=0.0,
        levels=(0, 1, 2, 3)),

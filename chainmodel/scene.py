@@ -39,7 +39,7 @@ import numpy as np
 from . import parameters as P
 from .geometry import Drive, check_positive
 from .integrate import Stepper, make_stepper
-from .models import Inputs, Model, model_class
+from .models import Inputs, Model, build_model, model_class
 from .presets import INCH, preset, preset_names, reference_values
 
 __all__ = ["Scene", "load_scene", "scene_names", "drive_from_parameters", "OperatingPoint",
@@ -521,10 +521,27 @@ class Scene:
         return self.drive_for(self.parameters)
 
     def model(self) -> Model:
-        return model_class(self.fidelity)(self.drive, self.parameters)
+        return build_model(self.fidelity, self.drive, self.parameters)
 
     def inputs(self, t: float) -> Inputs:
-        return self.operating.inputs(t)
+        u = self.operating.inputs(t)
+        if self.parameters["input_shaft.causality"] == "torque":
+            u = self._with_motor_torque(u)
+        return u
+
+    def _with_motor_torque(self, u: Inputs) -> Inputs:
+        """Torque causality: the operating point's speed profile as an open-loop motor torque,
+        motor.torque = J_refl * d(speed)/dt + the steady need of the load at that speed
+        (models/torque_causality.py: reflected_inertia, steady_motor_torque)."""
+        from .models import torque_causality as TC
+        key = tuple(sorted(self.parameters.items()))
+        cached = self.__dict__.get("_motor_profile")
+        if cached is None or cached[0] != key:
+            model = self.model()
+            cached = self.__dict__["_motor_profile"] = (key, model, TC.reflected_inertia(model))
+        _, model, j_refl = cached
+        torque = j_refl * u.acceleration + TC.steady_motor_torque(model, u.speed, u.torque)
+        return replace(u, motor_torque=torque)
 
     def check_operating_point(self, model: Model) -> None:
         """Refuse, before running, an operating point beyond what ``model`` holds to

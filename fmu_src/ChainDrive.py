@@ -346,12 +346,23 @@ class ChainDrive(Fmi2Slave):
             vr = self._add(Real, name, 0.0, self._real, causality=Fmi2Causality.input,
                            variability=Fmi2Variability.continuous, description=f"{desc} [{unit}]")
             self._input_vrs.append(vr)
+        motor = self._M.torque_causality
+        for spec in (motor.MOTOR_INPUT,):
+            vr = self._add(Real, spec.name, 0.0, self._real, causality=Fmi2Causality.input,
+                           variability=Fmi2Variability.continuous,
+                           description=f"{spec.description} [{spec.unit}]")
+            self._input_vrs.append(vr)
         for spec in self._M.ALL_OUTPUTS:
             vr = self._add(Real, spec.name, 0.0, self._real, causality=Fmi2Causality.output,
                            variability=Fmi2Variability.continuous,
                            initial=Fmi2Initial.calculated,
                            description=f"{spec.description} [{spec.unit or '1'}]")
             self._output_map.append((vr, spec.name))
+        self._motor_vrs = tuple(
+            self._add(Real, spec.name, 0.0, self._real, causality=Fmi2Causality.output,
+                      variability=Fmi2Variability.continuous, initial=Fmi2Initial.calculated,
+                      description=f"{spec.description} [{spec.unit}]")
+            for spec in motor.MOTOR_OUTPUTS)
         kinds = {float: (Real, self._real), int: (Integer, self._int),
                  bool: (Boolean, self._bool), str: (String, self._str)}
         defaults = _build_defaults(Path(self.resources))
@@ -382,9 +393,9 @@ class ChainDrive(Fmi2Slave):
                 "load torque auto chooses for [N.m] (0: the input at initialization)"), **auto))
         self._auto_set = frozenset(self._auto_vrs)
         self._output_names = [name for _, name in self._output_map]
-        self._output_vrs = frozenset(vr for vr, _ in self._output_map)
+        self._output_vrs = frozenset(vr for vr, _ in self._output_map) | frozenset(self._motor_vrs)
         self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
-        self._in_angle, self._in_speed, self._in_torque = self._input_vrs
+        self._in_angle, self._in_speed, self._in_torque, self._in_motor = self._input_vrs
         self._input_set = frozenset(self._input_vrs)
 
         # simulation state
@@ -540,7 +551,7 @@ class ChainDrive(Fmi2Slave):
                 "this build of the FMU; available: "
                 + ", ".join(f"{k} ({P.FIDELITY_NAMES[k]})" for k in sorted(classes)))
         drive = self._S.drive_from_parameters(params, "ChainDrive")
-        model = classes[level](drive, params)
+        model = self._M.build_model(level, drive, params)
         u = self._inputs_at(t)
         x0 = None if state is None else state.x
         stepper = self._I.make_stepper(model, params["solver.method"], t, u,
@@ -554,12 +565,26 @@ class ChainDrive(Fmi2Slave):
         self._params_changed = False
         return stepper
 
-    def _store_row(self, row):
+    def _store_row(self, row, fresh=False):
         """The outputs row of the stepper (ALL_OUTPUTS order) into the value table; returns the
         values as a list."""
         values = row.tolist()
         self._real.update(zip(self._output_vr_list, values))
+        self._store_motor(fresh)
         return values
+
+    def _store_motor(self, fresh=False):
+        """motor.angle, motor.speed: the rotor's state in torque causality; in angle causality
+        the input shaft's angle and speed (``fresh``: as just set, else held to the step's end)."""
+        st, real = self._stepper, self._real
+        if st is not None and hasattr(st.model, "motor_outputs"):
+            values = st.model.motor_outputs(st.x)
+        elif st is not None and not fresh:
+            u = st.inputs
+            values = (u.angle, u.speed)
+        else:
+            values = (real[self._in_angle], real[self._in_speed])
+        real.update(zip(self._motor_vrs, values))
 
     def _acceleration(self, t: float, speed: float) -> float:
         """Backward difference of the speed input between communication points (0 at the
@@ -587,7 +612,7 @@ class ChainDrive(Fmi2Slave):
                          Fmi2Status.warning)
                 self._warned_outputs = True
             return
-        self._store_row(row)
+        self._store_row(row, fresh=True)
         self._stale = False
         self._warned_outputs = False
 
@@ -637,8 +662,15 @@ class ChainDrive(Fmi2Slave):
         real = self._real
         speed = real[self._in_speed]
         try:
-            row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
-                                  self._acceleration(current_time, speed), real[self._in_torque])
+            if hasattr(st.model, "motor_outputs"):   # torque causality: motor.torque drives
+                out = st.advance(current_time + step_size, self._M.Inputs(
+                    0.0, 0.0, real[self._in_torque], 0.0, real[self._in_motor]))
+                row = self._output_row(out)
+                speed = st.model.motor_outputs(st.x)[1]   # the validity checks' input speed
+            else:
+                row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
+                                      self._acceleration(current_time, speed),
+                                      real[self._in_torque])
         except Exception as exc:   # diverged, bad input, or a model error: discard the step
             self.log(_fmi_text(f"step from t = {current_time:.9g} s over {step_size:.6g} s "
                                f"discarded, the FMU stays at t = {current_time:.9g} s: "
@@ -650,6 +682,10 @@ class ChainDrive(Fmi2Slave):
         self._stale = False
         self._check_validity(current_time + step_size, values, speed)
         return True
+
+    def _output_row(self, out: dict):
+        import numpy as np
+        return np.array([out[name] for name in self._output_names])
 
     def _check_validity(self, t, row, speed, found=()):
         """Log as fmi2Warning each validity problem (chainmodel.validity) once, when it first

@@ -31,6 +31,8 @@ pytestmark = pytest.mark.fmu
 
 OUTPUTS = [o.name for o in ALL_OUTPUTS]
 INPUTS = ["input_shaft.angle", "input_shaft.speed", "load.torque"]
+#: torque causality's input and the outputs of both causalities (issue 18 item 2)
+MOTOR = ["motor.angle", "motor.speed"]
 RTOL = 1e-12
 
 
@@ -191,20 +193,22 @@ def test_variables_follow_the_schema_and_the_contract(model_description):
     variables = list(model_description.find("ModelVariables"))
     by_name = {sv.get("name"): sv for sv in variables}
     # inputs (DESIGN.md, the FMU contract)
-    for name, unit in zip(INPUTS, ("rad", "rad/s", "N.m")):
+    for name, unit in zip(INPUTS + ["motor.torque"], ("rad", "rad/s", "N.m", "N.m")):
         sv = by_name[name]
         assert (sv.get("causality"), sv.get("variability")) == ("input", "continuous")
         assert sv[0].get("unit") == unit and sv[0].get("start") is not None
     # every output of the model interface, calculated, in ModelStructure
     outputs = [sv for sv in variables if sv.get("causality") == "output"]
-    assert [sv.get("name") for sv in outputs] == OUTPUTS
+    assert [sv.get("name") for sv in outputs] == OUTPUTS + MOTOR
+    outputs = outputs[:len(OUTPUTS)]
     for sv, spec in zip(outputs, ALL_OUTPUTS):
         assert sv[0].get("unit") == (spec.unit or "1")
         assert sv.get("initial") == "calculated" and sv[0].get("start") is None
     index = {sv.get("name"): str(i) for i, sv in enumerate(variables, start=1)}
     structure = model_description.find("ModelStructure")
     for part in ("Outputs", "InitialUnknowns"):
-        assert [u.get("index") for u in structure.find(part)] == [index[n] for n in OUTPUTS]
+        assert [u.get("index") for u in structure.find(part)] == [index[n] for n in
+                                                                  OUTPUTS + MOTOR]
     assert structure.find("Derivatives") is None
     # parameters: exactly the schema, typed by kind, defaults as start values
     params = {sv.get("name"): sv for sv in variables if sv.get("causality") == "parameter"}

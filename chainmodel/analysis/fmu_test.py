@@ -459,7 +459,8 @@ def scene_reference(scene, out: str | Path, fmu: str | Path, host: str = "fmpy")
     start = non_default_parameters(sc.parameters)
     step = float(times[1] - times[0])
     run = run_fmu(fmu, host, stop_time=float(times[-1]), step_size=step,
-                  inputs=dict(zip(INPUT_NAMES, (angle, speed, torque))), start_values=start)
+                  inputs=dict(zip(INPUT_NAMES, (angle, speed, torque))), start_values=start,
+                  outputs=list(OUTPUT_NAMES))    # the library's (not motor.*: masters' only)
     level = sc.fidelity
     folder = Path(out) / (sc.name.replace(" ", "_") or "scene")
     readme = (f"# {folder.name}\n\nScene {sc.name!r} at fidelity {level}, recorded from "

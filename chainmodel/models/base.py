@@ -44,6 +44,9 @@ class Inputs:
     speed: float = 0.0         # input_shaft.speed [rad/s]
     torque: float = 0.0        # load.torque [N.m]
     acceleration: float = 0.0  # d(speed)/dt [rad/s^2]
+    #: motor.torque [N.m]: the torque driving the motor rotor in torque causality
+    #: (input_shaft.causality = torque, models/torque_causality.py); unused in angle causality
+    motor_torque: float = 0.0
 
     def hold(self, dt: float) -> "Inputs":
         """First-order hold over a communication step: the angle advances at the held speed."""
@@ -52,7 +55,8 @@ class Inputs:
     def check(self) -> "Inputs":
         for name, value in (("input_shaft.angle", self.angle), ("input_shaft.speed", self.speed),
                             ("load.torque", self.torque),
-                            ("input_shaft.acceleration", self.acceleration)):
+                            ("input_shaft.acceleration", self.acceleration),
+                            ("motor.torque", self.motor_torque)):
             if not math.isfinite(value):
                 raise ValueError(f"input {name} must be finite, got {value!r}")
         return self
