@@ -52,6 +52,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -205,7 +206,7 @@ def _vendored_chainmodel(resources: str):
         _repoint(alias, root)
     mod = {name: importlib.import_module(f"{alias}.{name}")
            for name in ("parameters", "models", "integrate", "scene", "fidelity_auto",
-                        "validity")}
+                        "validity", "cosim")}
     mod["package"] = sys.modules[alias]
     return mod
 
@@ -282,14 +283,16 @@ def _wrapper_hosts_us(resources: str, model_identifier: str) -> bool:
 
 
 def _fmi_text(message: str) -> str:
-    """FMI log messages are printf format strings: escape '%'."""
-    return str(message).replace("%", "%%")
+    """FMI log messages are printf format strings, but not every host formats them (libcosim,
+    some loggers print them as they are, so an escaped '%%' showed as "5 %%"): no '%' at all,
+    the word instead."""
+    return re.sub(r"\s*%", " percent", str(message))
 
 
 def _why(exc: BaseException) -> str:
     """The library's ValueError / SimulationDiverged messages are sentences for users; anything
     else is a defect and keeps its type name."""
-    if isinstance(exc, ValueError) or type(exc).__name__ == "SimulationDiverged":
+    if isinstance(exc, ValueError) or any(c.__name__ == "SimulationDiverged" for c in type(exc).__mro__):
         return str(exc)
     return f"{type(exc).__name__}: {exc}"
 
@@ -328,6 +331,8 @@ class ChainDrive(Fmi2Slave):
         self._lib_auto = lib["fidelity_auto"]
         self._validity = lib["validity"]
         self._monitor = None         # chainmodel.validity.Monitor of the run (fmi2Warning logs)
+        self._cosim = lib["cosim"]
+        self._session = self._cosim.CosimSession(lib, "ChainDrive")
         self.version = getattr(lib["package"], "__version__", None)
         self.default_experiment = DEFAULT_EXPERIMENT
 
@@ -394,8 +399,6 @@ class ChainDrive(Fmi2Slave):
         self._model_params: dict | None = None  # validated parameters the model was built with
         self._params_changed = True
         self._stale = False          # outputs must be recomputed (inputs set) before read
-        self._prev_t = None          # previous communication point and the speed set there
-        self._prev_speed = 0.0
         self._warned_outputs = False
 
     def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
@@ -509,50 +512,34 @@ class ChainDrive(Fmi2Slave):
     def _parameter_values(self) -> dict:
         return {p.name: table[vr] for vr, p, table in self._params}
 
-    def _inputs_at(self, t: float):
-        """Inputs at communication point t, with the backward-difference acceleration."""
+    def _sync_inputs(self):
+        """The input values of the value table into the session."""
         real = self._real
-        speed = real[self._in_speed]
-        if self._prev_t is not None and t > self._prev_t:
-            acc = (speed - self._prev_speed) / (t - self._prev_t)
-        else:
-            acc = 0.0
-        return self._M.Inputs(real[self._in_angle], speed, real[self._in_torque], acc)
+        self._session.set_inputs(real[self._in_angle], real[self._in_speed],
+                                 real[self._in_torque])
+        return self._session
 
     def _build(self, t: float, state=None):
         """Validate the parameters and build model and stepper at time t (raises ValueError)."""
         P = self._P
         params = P.validate(self._parameter_values())
         on, outputs, accuracy, speed, load = (self._table_of[vr][vr] for vr in self._auto_vrs)
+        session = self._sync_inputs()
         if on:
-            u0 = self._inputs_at(t)
+            u0 = session.inputs(t)
             params, choice = self._lib_auto.choose_parameters(
                 params, speed if speed else u0.speed, load if load else u0.torque,
                 outputs or None, accuracy)
             if choice.message != getattr(self, "_auto_message", None):
                 self._auto_message = choice.message
                 self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
-        level = params["fidelity"]
-        classes = self._M.MODEL_CLASSES
-        if level not in classes:
-            raise ValueError(
-                f"parameter fidelity = {level} ({P.FIDELITY_NAMES[level]}) is not available in "
-                "this build of the FMU; available: "
-                + ", ".join(f"{k} ({P.FIDELITY_NAMES[k]})" for k in sorted(classes)))
-        drive = self._S.drive_from_parameters(params, "ChainDrive")
-        model = classes[level](drive, params)
-        u = self._inputs_at(t)
-        x0 = None if state is None else state.x
-        stepper = self._I.make_stepper(model, params["solver.method"], t, u,
-                                       step=params["solver.step"], rtol=params["solver.rtol"],
-                                       tolerance=params["solver.tolerance"], x0=x0)
-        if state is not None:
-            stepper.set_state(state)
-        else:   # a new run: its validity checks start afresh
-            self._monitor = self._validity.Monitor(drive, params, level, self._output_names)
-        self._stepper, self._model_params = stepper, params
+        built = session.build(params, t, state)
+        if state is None:   # a new run: its validity checks start afresh
+            self._monitor = self._validity.Monitor(built.drive, params, built.level,
+                                                   self._output_names)
+        self._stepper, self._model_params = built.stepper, params
         self._params_changed = False
-        return stepper
+        return built.stepper
 
     def _store_row(self, row):
         """The outputs row of the stepper (ALL_OUTPUTS order) into the value table; returns the
@@ -561,23 +548,12 @@ class ChainDrive(Fmi2Slave):
         self._real.update(zip(self._output_vr_list, values))
         return values
 
-    def _acceleration(self, t: float, speed: float) -> float:
-        """Backward difference of the speed input between communication points (0 at the
-        first point)."""
-        if self._prev_t is not None and t > self._prev_t:
-            return (speed - self._prev_speed) / (t - self._prev_t)
-        return 0.0
-
     def _refresh_outputs(self):
         """Outputs for the current state and the inputs set since (direct feedthrough)."""
         try:
             if self._stepper is None or (self._params_changed and not self._initialized):
                 self._build(self._t0)
-            st = self._stepper
-            real = self._real
-            speed = real[self._in_speed]
-            row = st.outputs_held(real[self._in_angle], speed, self._acceleration(st.t, speed),
-                                  real[self._in_torque])
+            row = self._sync_inputs().outputs()
             bad = [n for n, v in zip(self._output_names, row.tolist()) if not math.isfinite(v)]
             if bad:
                 raise self._M.SimulationDiverged(f"non-finite outputs {', '.join(bad[:5])}")
@@ -634,11 +610,10 @@ class ChainDrive(Fmi2Slave):
             except Exception as exc:
                 self.log(_fmi_text(f"parameter change refused: {_why(exc)}"), Fmi2Status.discard)
                 return False
-        real = self._real
-        speed = real[self._in_speed]
+        session = self._sync_inputs()
+        speed = session.speed
         try:
-            row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
-                                  self._acceleration(current_time, speed), real[self._in_torque])
+            row = session.step(current_time, step_size)
         except Exception as exc:   # diverged, bad input, or a model error: discard the step
             self.log(_fmi_text(f"step from t = {current_time:.9g} s over {step_size:.6g} s "
                                f"discarded, the FMU stays at t = {current_time:.9g} s: "
@@ -646,7 +621,6 @@ class ChainDrive(Fmi2Slave):
                      Fmi2Status.discard)
             return False
         values = self._store_row(row)
-        self._prev_t, self._prev_speed = current_time, speed
         self._stale = False
         self._check_validity(current_time + step_size, values, speed)
         return True
@@ -666,18 +640,14 @@ class ChainDrive(Fmi2Slave):
 
     # --- FMU state ------------------------------------------------------------------------------
     def _get_fmu_state(self):
-        st = self._stepper
-        s = None
-        if st is not None:
-            ss = st.get_state()
-            u = ss.inputs
-            s = {"t": ss.t, "x": [float(v) for v in ss.x], "h": ss.h,
-                 "inputs": [u.angle, u.speed, u.torque, u.acceleration], "extra": dict(ss.extra)}
+        session = self._session.get_state()
         return {"format": "ChainDrive-1",
                 "real": list(self._real.items()), "int": list(self._int.items()),
                 "bool": list(self._bool.items()), "str": list(self._str.items()),
                 "t0": self._t0, "initialized": self._initialized, "stale": self._stale,
-                "prev_t": self._prev_t, "prev_speed": self._prev_speed, "stepper": s}
+                "prev_t": session["prev_t"], "prev_speed": session["prev_speed"],
+                "stepper": session["stepper"] if self._stepper is not None else None,
+                "watch": session["watch"]}
 
     def _set_fmu_state(self, state):
         if not isinstance(state, dict) or state.get("format") != "ChainDrive-1":
@@ -687,21 +657,18 @@ class ChainDrive(Fmi2Slave):
             for vr, value in state[key]:
                 table[int(vr)] = value
         self._t0 = state["t0"]
-        self._prev_t, self._prev_speed = state["prev_t"], state["prev_speed"]
         self._initialized = state["initialized"]
-        s = state["stepper"]
-        if s is None:
+        session = self._sync_inputs()
+        session.prev_t, session.prev_speed = state["prev_t"], state["prev_speed"]
+        if state["stepper"] is None:
+            session.restore(state, None)
             self._stepper, self._model_params, self._params_changed = None, None, True
         else:
-            import numpy as np
-            saved = self._I.StepperState(s["t"], np.array(s["x"], float), s["h"],
-                                         self._M.Inputs(*s["inputs"]), dict(s["extra"]))
             try:
                 if (self._stepper is None or self._params_changed
                         or self._P.validate(self._parameter_values()) != self._model_params):
-                    self._build(saved.t, saved)
-                else:
-                    self._stepper.set_state(saved)
+                    self._build(state["stepper"]["t"], session.stepper_state(state["stepper"]))
+                session.restore(state, None)
             except Exception as exc:
                 self._fail(f"fmi2SetFMUstate: cannot restore this state: {_why(exc)}")
         self._stale = state["stale"]
