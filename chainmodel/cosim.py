@@ -25,7 +25,13 @@ import numpy as np
 
 from .models.base import Inputs, SimulationDiverged
 
-__all__ = ["CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
+#: the inputs of the session (and of the FMU), in the order of :meth:`CosimSession.set_inputs`
+INPUTS = ("input_shaft.angle", "input_shaft.speed", "load.torque")
+
+#: units of the FMU adapter's Real coupling.* variables (build_fmu.py writes them)
+FMU_UNITS = {"coupling.motor_inertia": "kg.m2", "coupling.max_step": "s"}
+
+__all__ = ["INPUTS", "FMU_UNITS", "CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
            "JACOBI_CONSTANT", "GAUSS_SEIDEL_CONSTANT"]
 
 #: h_max * omega_c at which the explicit Jacobi coupling of a motor rotor J (fed the held
@@ -188,6 +194,9 @@ class CosimSession:
         self.prev_t: float | None = None     # previous communication point and its speed input
         self.prev_speed = 0.0
         self.motor_inertia = 0.0              # a motor rotor's inertia, for the coupling message
+        #: False: input_shaft.torque leaves out the drive's inertia torque (the part linear in the
+        #: input's acceleration; level 0 and input_shaft.rigid), the motor model carries it
+        self.include_drive_inertia = True
         self.watch = CouplingWatch()
 
     # --- inputs --------------------------------------------------------------------------------
@@ -238,7 +247,21 @@ class CosimSession:
         """Every output (ALL_OUTPUTS order) at the current state for the inputs set (direct
         feedthrough); a buffer the next call reuses. Refused inputs raise ValueError."""
         st = self.stepper
-        return st.outputs_held(self.angle, self.speed, self.acceleration(st.t), self.torque)
+        row = st.outputs_held(self.angle, self.speed, self.acceleration(st.t), self.torque)
+        if self.include_drive_inertia:
+            return row
+        return self._without_drive_inertia(row, self.angle, self.speed, self.torque)
+
+    def _without_drive_inertia(self, row: np.ndarray, angle, speed, torque) -> np.ndarray:
+        """``row`` (a copy) with input_shaft.torque of the same state and inputs but zero input
+        acceleration: the drive's inertia torque I_eff(angle) a, and with it the feedthrough
+        I_eff / h of the speed input through the backward difference, left to the motor model.
+        At levels 1-3 with the shaft spring the acceleration does not enter that torque."""
+        from .models.outputs import O_INPUT_SHAFT_TORQUE
+        row = row.copy()
+        row[O_INPUT_SHAFT_TORQUE] = self.stepper.outputs_held(angle, speed, 0.0, torque)[
+            O_INPUT_SHAFT_TORQUE]
+        return row
 
     def step(self, t: float, h: float) -> np.ndarray:
         """Advance from ``t`` (the current time) to ``t + h`` with the inputs held first-order;
@@ -264,6 +287,9 @@ class CosimSession:
             self.watch.restore(watch_state)
             raise
         self.prev_t, self.prev_speed = t, self.speed
+        if not self.include_drive_inertia:
+            u = st.inputs      # the held inputs at t + h
+            row = self._without_drive_inertia(row, u.angle, u.speed, u.torque)
         return row
 
     def coupling_message(self, t: float, h: float, name: str) -> str:

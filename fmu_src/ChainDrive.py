@@ -385,7 +385,27 @@ class ChainDrive(Fmi2Slave):
                 **auto),
             self._add(Real, "auto.load_torque", 0.0, self._real, description=(
                 "load torque auto chooses for [N.m] (0: the input at initialization)"), **auto))
-        self._auto_set = frozenset(self._auto_vrs)
+        # the coupling to a motor model (chainmodel.cosim; docs/fmu.md "In a system model")
+        self._coupling_vrs = (
+            self._add(Real, "coupling.motor_inertia", 0.0, self._real, description=(
+                "inertia of the motor rotor a master couples to input_shaft.angle/.speed "
+                "(angle causality) [kg.m2], for coupling.max_step and the message of an "
+                "unstable coupling (0: unknown)"), **auto),
+            self._add(Boolean, "input_shaft.include_drive_inertia", True, self._bool,
+                      description=(
+                          "input_shaft.torque includes the drive's inertia torque (the part "
+                          "proportional to the input's acceleration, at fidelity 0 and with "
+                          "input_shaft.rigid); false leaves it to the motor model and removes "
+                          "the feedthrough I_eff/h of input_shaft.speed"), **auto))
+        self._max_step_vr = self._add(
+            Real, "coupling.max_step", 0.0, self._real, causality=Fmi2Causality.calculatedParameter,
+            variability=Fmi2Variability.fixed, initial=Fmi2Initial.calculated, description=(
+                "largest communication step [s] at which a Jacobi master holds a motor rotor of "
+                "coupling.motor_inertia on the input-shaft spring (angle causality): "
+                f"{self._cosim.JACOBI_CONSTANT:g} / omega_c, omega_c = sqrt(k_r (1/J + "
+                "1/I_driver)); Gauss-Seidel holds about 3.5 times more; 0 where no such limit "
+                "applies (coupling.motor_inertia 0, fidelity 0, input_shaft.rigid)"))
+        self._auto_set = frozenset(self._auto_vrs + self._coupling_vrs)
         self._output_names = [name for _, name in self._output_map]
         self._output_vrs = frozenset(vr for vr, _ in self._output_map)
         self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
@@ -533,7 +553,16 @@ class ChainDrive(Fmi2Slave):
             if choice.message != getattr(self, "_auto_message", None):
                 self._auto_message = choice.message
                 self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
+        J_vr, inertia_vr = self._coupling_vrs
+        session.motor_inertia = self._real[J_vr]
+        if not (session.motor_inertia >= 0 and math.isfinite(session.motor_inertia)):
+            raise ValueError(f"parameter coupling.motor_inertia = {session.motor_inertia!r} "
+                             "kg.m2 is not valid; valid: >= 0 (0: unknown)")
+        session.include_drive_inertia = bool(self._bool[inertia_vr])
         built = session.build(params, t, state)
+        h_max = (self._cosim.stable_step(session.motor_inertia, params)
+                 if session.motor_inertia > 0 else math.inf)
+        self._real[self._max_step_vr] = h_max if math.isfinite(h_max) else 0.0
         if state is None:   # a new run: its validity checks start afresh
             self._monitor = self._validity.Monitor(built.drive, params, built.level,
                                                    self._output_names)
@@ -590,6 +619,13 @@ class ChainDrive(Fmi2Slave):
                            f"{type(st).__name__} {getattr(st, 'method', '')}; quasi-static "
                            f"estimates at this level: {', '.join(qs) or 'none'}"),
                  Fmi2Status.ok, "logAll")
+        if self._real[self._max_step_vr] > 0:
+            self.log(_fmi_text(
+                f"angle causality: a motor rotor of coupling.motor_inertia = "
+                f"{self._session.motor_inertia:g} kg.m2 on the input-shaft spring holds at "
+                f"communication steps up to coupling.max_step = "
+                f"{self._real[self._max_step_vr]:.3g} s (Jacobi; docs/fmu.md, \"In a system "
+                "model\")"), Fmi2Status.ok, "logAll")
 
     def do_step(self, current_time, step_size):
         st = self._stepper
