@@ -30,8 +30,10 @@ INPUTS = ("input_shaft.angle", "input_shaft.speed", "load.torque")
 
 #: units of the FMU adapter's Real coupling.* variables (build_fmu.py writes them)
 FMU_UNITS = {"coupling.motor_inertia": "kg.m2", "coupling.max_step": "s"}
+#: the FMU adapter's parameters of the coupling (names)
+FMU_PARAMETERS = ("coupling.motor_inertia", "input_shaft.include_drive_inertia")
 
-__all__ = ["INPUTS", "FMU_UNITS", "CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
+__all__ = ["INPUTS", "FMU_UNITS", "FMU_PARAMETERS", "CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
            "JACOBI_CONSTANT", "GAUSS_SEIDEL_CONSTANT"]
 
 #: h_max * omega_c at which the explicit Jacobi coupling of a motor rotor J (fed the held
