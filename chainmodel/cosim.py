@@ -216,9 +216,10 @@ class CosimSession:
         return Inputs(self.angle, self.speed, self.torque, self.acceleration(t))
 
     # --- model ---------------------------------------------------------------------------------
-    def build(self, params: dict, t: float, state=None) -> Built:
+    def build(self, params: dict, t: float, state=None, model=None) -> Built:
         """Model and stepper for validated ``params`` at time ``t`` (from ``state``, a
-        StepperState, when given). Raises ValueError for a level this package lacks."""
+        StepperState, when given; ``model``: one already built from ``params``). Raises
+        ValueError for a level this package lacks."""
         level = params["fidelity"]
         classes = self._M.MODEL_CLASSES
         if level not in classes:
@@ -227,8 +228,9 @@ class CosimSession:
                 f"parameter fidelity = {level} ({FIDELITY_NAMES[level]}) is not available in "
                 "this build of the FMU; available: "
                 + ", ".join(f"{k} ({FIDELITY_NAMES[k]})" for k in sorted(classes)))
-        drive = self._S.drive_from_parameters(params, self.name)
-        model = classes[level](drive, params)
+        if model is None:
+            model = classes[level](self._S.drive_from_parameters(params, self.name), params)
+        drive = model.drive
         x0 = None if state is None else state.x
         stepper = self._I.make_stepper(model, params["solver.method"], t, self.inputs(t),
                                        step=params["solver.step"], rtol=params["solver.rtol"],
@@ -265,8 +267,9 @@ class CosimSession:
             O_INPUT_SHAFT_TORQUE]
         return row
 
-    def step(self, t: float, h: float) -> np.ndarray:
-        """Advance from ``t`` (the current time) to ``t + h`` with the inputs held first-order;
+    def step(self, t: float, h: float, t_end: float | None = None) -> np.ndarray:
+        """Advance from ``t`` (the current time) to ``t + h`` (or exactly to ``t_end``, a grid
+        point of the master's) with the inputs held first-order;
         return every output there. Raises :class:`CouplingUnstable` (nothing done) when the
         inputs show an unstable coupling, SimulationDiverged or ValueError when the step fails;
         a failed step leaves the session at ``t``."""
@@ -277,7 +280,8 @@ class CosimSession:
             self.watch.restore(watch_state)
             raise CouplingUnstable(self.coupling_message(t, h, growing))
         try:
-            row = st.advance_held(t + h, self.angle, self.speed, self.acceleration(t), self.torque)
+            row = st.advance_held(t + h if t_end is None else t_end, self.angle, self.speed,
+                                  self.acceleration(t), self.torque)
         except (SimulationDiverged, ValueError) as exc:
             suspect = self.watch.suspect()
             self.watch.restore(watch_state)
