@@ -419,6 +419,7 @@ class ChainDrive(Fmi2Slave):
         self._model_params: dict | None = None  # validated parameters the model was built with
         self._params_changed = True
         self._stale = False          # outputs must be recomputed (inputs set) before read
+        self._told_coupling = False  # an unstable coupling was written to stderr
         self._warned_outputs = False
 
     def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
@@ -655,6 +656,15 @@ class ChainDrive(Fmi2Slave):
                                f"discarded, the FMU stays at t = {current_time:.9g} s: "
                                f"{_why(exc)}"),
                      Fmi2Status.discard)
+            if isinstance(exc, self._cosim.CouplingUnstable) and not self._told_coupling:
+                # hosts that instantiate with logging off (libcosim) would show only that the
+                # step failed: this one, the system's fault rather than ours, also goes to stderr
+                self._told_coupling = True
+                try:
+                    print(f"ChainDrive FMU ({self.instance_name}): {exc}", file=sys.stderr,
+                          flush=True)
+                except Exception:  # pragma: no cover - no usable stderr in the host
+                    pass
             return False
         values = self._store_row(row)
         self._stale = False

@@ -229,3 +229,20 @@ def test_model_structure_lists_exactly_what_moves_within_a_step(chaindrive_fmu, 
 
 
 MOVED: dict = {}
+
+
+def test_libcosim_shows_the_coupling_message(chaindrive_fmu, capfd):
+    """libcosim instantiates with logging off and reports only a failed step: the FMU writes
+    the unstable coupling (once per instance) to stderr. The speed input here is what an
+    unstable coupling sets: an oscillation of 6.3 steps per period growing 1.2 times a step."""
+    from chainmodel.fmu_hosts import HostUnavailable, run_fmu
+    k = np.arange(101)
+    speed = 1e-2 * np.cumsum(1.2 ** k * np.cos(k))
+    try:
+        with pytest.raises(RuntimeError, match="failed"):
+            run_fmu(chaindrive_fmu, "libcosim", stop_time=0.05, step_size=5e-4,
+                    inputs={"input_shaft.speed": speed}, start_values={"fidelity": 1})
+    except HostUnavailable as exc:   # pragma: no cover - libcosimpy is in the test extra
+        pytest.fail(str(exc))
+    err = capfd.readouterr().err
+    assert "co-simulation coupling unstable" in err and "torque causality" in err
