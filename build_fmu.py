@@ -17,7 +17,7 @@
 
 Steps:
 1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` and the
-   adapter as ``resources/_vendor/ChainDrive.py``; their content hash is the build id
+   adapter as ``resources/_vendor/ChainDrive.py`` (with its ``embedding.py``); their content hash is the build id
    (``resources/_vendor/build.json``, with the pythonfmu version). Inside a process the adapter is the module
    ``_chaindrive_<id>_adapter`` and the package ``_chaindrive_<id>``, and pythonfmu's entry
    module is ``resources/chaindrive_<id>.py`` (see SHIM), so any number of different builds
@@ -353,6 +353,7 @@ def build(out: Path = DEFAULT_OUT, quiet: bool = False,
         shutil.copytree(HERE / "chainmodel", vendor / "chainmodel",
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
         shutil.copy2(ADAPTER, vendor / "ChainDrive.py")
+        shutil.copy2(ADAPTER.with_name("embedding.py"), vendor / "embedding.py")
         if defaults:
             (vendor / "defaults.json").write_text(json.dumps(meta["defaults"], sort_keys=True))
         bid = build_id(vendor)
