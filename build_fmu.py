@@ -71,8 +71,7 @@ DOC_MD = HERE / "docs" / "fmu.md"
 
 # what the modelDescription completion needs: chainmodel.fmu_model_description (tested there)
 from chainmodel.fmu_model_description import (BASE, CAPABILITIES, DISPLAY, SPEED_DISPLAY,  # noqa: E402,F401
-                                              DescriptionError, base_unit, fmt, library_metadata,
-                                              output_dependencies)
+                                              DescriptionError, base_unit, fmt, library_metadata)
 from chainmodel.fmu_model_description import complete_model_description as _complete  # noqa: E402
 
 
@@ -100,6 +99,23 @@ def absolute_self_references(package: Path) -> list[str]:
 
 
 # --- modelDescription.xml --------------------------------------------------------------------
+
+def model_structure_dependencies() -> dict[str, list[str]]:
+    """Each output's direct input dependencies for ModelStructure
+    (``chainmodel.fmu_model_description.output_dependencies``: found by perturbing the library's
+    session at every level), computed in a subprocess with the plain-numpy kernels
+    (CHAINMODEL_NUMBA=0; the same table as compiled, 1 s instead of compiling level 3 here)."""
+    import os
+    import subprocess
+    code = ("import json; from chainmodel.fmu_model_description import output_dependencies; "
+            "print(json.dumps(output_dependencies()))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=HERE,
+                          env=dict(os.environ, CHAINMODEL_NUMBA="0"))
+    if proc.returncode != 0:
+        raise SystemExit("build_fmu: cannot find the outputs' input dependencies:\n"
+                         + proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
 
 def complete_model_description(xml: bytes, meta: dict) -> bytes:
     """Add what pythonfmu does not write (chainmodel.fmu_model_description)."""
@@ -341,7 +357,7 @@ def build(out: Path = DEFAULT_OUT, quiet: bool = False,
 
     out = Path(out).resolve()
     meta = library_metadata()
-    meta["dependencies"] = output_dependencies()   # ModelStructure: found by perturbation
+    meta["dependencies"] = model_structure_dependencies()
     defaults = dict(defaults or {})
     if defaults:
         from chainmodel import parameters as P
