@@ -274,23 +274,19 @@ class CosimSession:
         inputs show an unstable coupling, SimulationDiverged or ValueError when the step fails;
         a failed step leaves the session at ``t``."""
         st = self.stepper
-        watch_state = self.watch.state()
+        # the watch takes the inputs of this point even when the step then fails: a master
+        # retrying the point with the same inputs adds a zero increment, which it skips
         growing = self.watch.update((self.speed, self.torque))
         if growing is not None:
-            self.watch.restore(watch_state)
             raise CouplingUnstable(self.coupling_message(t, h, growing))
         try:
             row = st.advance_held(t + h if t_end is None else t_end, self.angle, self.speed,
                                   self.acceleration(t), self.torque)
         except (SimulationDiverged, ValueError) as exc:
             suspect = self.watch.suspect()
-            self.watch.restore(watch_state)
             if suspect is not None:
                 raise CouplingUnstable(self.coupling_message(t, h, suspect)
                                        + f" (The step itself failed: {exc})") from exc
-            raise
-        except Exception:
-            self.watch.restore(watch_state)
             raise
         self.prev_t, self.prev_speed = t, self.speed
         if not self.include_drive_inertia:
