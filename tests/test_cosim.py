@@ -183,3 +183,37 @@ def test_session_refuses_a_step_when_the_speed_input_oscillates_and_grows():
     t_failed = session.t
     session.set_inputs(angle, 0.0, 0.0)   # the session stayed at the last point
     assert session.t == t_failed
+
+
+@pytest.mark.parametrize("level,rigid", [(0, False), (1, True), (1, False)])
+def test_without_drive_inertia_the_torque_ignores_the_acceleration_estimate(level, rigid):
+    """input_shaft.include_drive_inertia = false: input_shaft.torque is the same whatever the
+    backward-difference acceleration (here changed through the speed at the last point), every other
+    output unchanged; with it, the torque changes linearly in that acceleration (level 0 and the
+    rigid shaft; at level 1 with the spring it does not enter the torque at all)."""
+    from chainmodel.models.outputs import O_INPUT_SHAFT_TORQUE
+    params = P.validate({"fidelity": level, "input_shaft.rigid": rigid})
+    rows = {}
+    for include in (True, False):
+        s = CosimSession()
+        s.include_drive_inertia = include
+        s.set_inputs(0.1, 1.0, 10.0)
+        s.build(params, 0.0)
+        s.step(0.0, 1e-3)
+        s.set_inputs(0.1 + 1e-3, 1.0, 10.0)
+        for prev in (0.9, 0.95, 1.0):   # the speed at the last point: only the estimate moves
+            s.prev_speed = prev
+            rows[include, prev] = s.outputs().copy()
+    T = O_INPUT_SHAFT_TORQUE
+    others = [k for k in range(len(rows[True, 1.0])) if k != T]
+    for prev in (0.9, 0.95):
+        assert rows[False, prev][T] == rows[False, 1.0][T]
+        np.testing.assert_array_equal(rows[False, prev][others], rows[True, prev][others])
+    # acceleration estimates 100, 50, 0 rad/s2: equal steps of the torque with the inertia
+    d1 = rows[True, 0.9][T] - rows[True, 0.95][T]
+    d2 = rows[True, 0.95][T] - rows[True, 1.0][T]
+    if level == 0 or rigid:
+        assert d1 > 0 and d1 == pytest.approx(d2, rel=1e-6)
+        assert rows[False, 1.0][T] == pytest.approx(rows[True, 1.0][T], rel=1e-12)  # a = 0
+    else:
+        assert d1 == 0 and d2 == 0
