@@ -284,9 +284,10 @@ class CosimSession:
                                   self.acceleration(t), self.torque)
         except (SimulationDiverged, ValueError) as exc:
             suspect = self.watch.suspect()
-            if suspect is not None:
+            if suspect is not None:   # the failure is the coupling's: its advice is not ours
+                what = str(exc).split(";")[0]
                 raise CouplingUnstable(self.coupling_message(t, h, suspect)
-                                       + f" (The step itself failed: {exc})") from exc
+                                       + f" (The step itself failed: {what}.)") from exc
             raise
         self.prev_t, self.prev_speed = t, self.speed
         if not self.include_drive_inertia:
