@@ -217,3 +217,23 @@ def test_without_drive_inertia_the_torque_ignores_the_acceleration_estimate(leve
         assert rows[False, 1.0][T] == pytest.approx(rows[True, 1.0][T], rel=1e-12)  # a = 0
     else:
         assert d1 == 0 and d2 == 0
+
+
+def test_a_step_failing_during_a_fast_growing_oscillation_blames_the_coupling():
+    """Far past the stable step the speed input alternates and grows so fast (6 times a step)
+    that level 1's speed limit (236 rad/s) refuses a step before four whole cycles are seen:
+    the message is the coupling's, quoting the refusal without its advice."""
+    params = P.validate({"fidelity": 1})
+    session = CosimSession()
+    session.set_inputs(0.0, 1.0, 0.0)
+    session.build(params, 0.0)
+    h, angle, speed = 1e-3, 0.0, 1.0
+    with pytest.raises(CouplingUnstable) as err:
+        for k in range(12):
+            session.set_inputs(angle, speed, 0.0)
+            session.step(k * h, h)
+            angle += h * speed
+            speed += 0.01 * (-6.0) ** k
+    text = str(err.value)
+    assert "coupling unstable" in text and "The step itself failed" in text
+    assert "lower speed" not in text and "fidelity 3" not in text
