@@ -17,7 +17,7 @@
 
 Steps:
 1. stage a copy of the ``chainmodel`` package as ``resources/_vendor/chainmodel`` and the
-   adapter as ``resources/_vendor/ChainDrive.py``; their content hash is the build id
+   adapter as ``resources/_vendor/ChainDrive.py`` (with its ``embedding.py``); their content hash is the build id
    (``resources/_vendor/build.json``, with the pythonfmu version). Inside a process the adapter is the module
    ``_chaindrive_<id>_adapter`` and the package ``_chaindrive_<id>``, and pythonfmu's entry
    module is ``resources/chaindrive_<id>.py`` (see SHIM), so any number of different builds
@@ -69,97 +69,10 @@ REFERENCE_CSV = HERE / "docs" / "fmu_reference.csv"
 REFERENCES = HERE / "references"
 DOC_MD = HERE / "docs" / "fmu.md"
 
-#: SI base-unit exponents of the unit symbols the schema and the outputs use
-BASE = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "A": {"A": 1},
-        "K": {"K": 1}, "mol": {"mol": 1}, "cd": {"cd": 1},
-        "N": {"kg": 1, "m": 1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2},
-        "W": {"kg": 1, "m": 2, "s": -3}, "Pa": {"kg": 1, "m": -1, "s": -2}, "Hz": {"s": -1}}
-#: display units: name -> (unit, factor) with value_display = factor * value
-DISPLAY = {"mm": ("m", 1000.0), "deg": ("rad", 180.0 / math.pi),
-           "rpm": ("rad/s", 60.0 / (2.0 * math.pi))}
-#: inputs and outputs shown in rpm by tools that honour displayUnit
-SPEED_DISPLAY = {"input_shaft.speed": "rpm", "driver.speed": "rpm", "driven.speed": "rpm"}
-CAPABILITIES = {"needsExecutionTool": "true",   # a Python with numpy and scipy
-                "canHandleVariableCommunicationStepSize": "true",
-                "canInterpolateInputs": "false", "maxOutputDerivativeOrder": "0",
-                "canRunAsynchronuously": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
-                "canNotUseMemoryManagementFunctions": "true", "canGetAndSetFMUstate": "true",
-                "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false"}
-
-
-def base_unit(unit: str) -> dict[str, int]:
-    """SI base-unit exponents of a unit written like 'N.m.s/rad', 'm/s2', 'kg.m2' ('1': none)."""
-    if unit in ("", "1"):
-        return {}
-    if unit.count("/") > 1:
-        raise ValueError(f"unit {unit!r}: write at most one '/'")
-    exps: dict[str, int] = {}
-    for sign, part in zip((1, -1), unit.split("/")):
-        for factor in part.split("."):
-            m = re.fullmatch(r"([A-Za-z]+)(-?\d+)?", factor)
-            if not m or m.group(1) not in BASE:
-                raise ValueError(f"unit {unit!r}: unknown symbol {factor!r}; add it to "
-                                 "build_fmu.BASE")
-            power = sign * int(m.group(2) or 1)
-            for b, e in BASE[m.group(1)].items():
-                exps[b] = exps.get(b, 0) + e * power
-    return {b: e for b, e in exps.items() if e}
-
-
-def fmt(value: float) -> str:
-    """Shortest exact text of a float (repr), as FMI tools parse it back to the same double."""
-    text = repr(float(value))
-    return text[:-2] if text.endswith(".0") and "e" not in text else text
-
-
-# --- metadata from the library ---------------------------------------------------------------
-
-def library_metadata() -> dict:
-    """Units, display units and output notes from the chainmodel being vendored."""
-    import chainmodel
-    from chainmodel import parameters as P
-    from chainmodel.models import ALL_OUTPUTS, MODEL_CLASSES
-    from chainmodel.models.base import QUASI_STATIC
-    from chainmodel.scene import drive_from_parameters
-
-    units = {o.name: o.unit or "1" for o in ALL_OUTPUTS}
-    units.update({"input_shaft.angle": "rad", "input_shaft.speed": "rad/s", "load.torque": "N.m"})
-    from chainmodel.models.torque_causality import MOTOR_INPUT, MOTOR_OUTPUTS
-    units.update({o.name: o.unit for o in (MOTOR_INPUT, *MOTOR_OUTPUTS)})
-    from chainmodel.fidelity_auto import FMU_UNITS    # the adapter's auto.* parameters
-    units.update(FMU_UNITS)
-    display = dict(SPEED_DISPLAY)
-    for p in P.PARAMETERS:
-        if p.kind is float:
-            units[p.name] = p.unit or "1"
-            if p.display_unit:
-                display[p.name] = p.display_unit
-    params = P.validate({})
-    drive = drive_from_parameters(params, "defaults")
-    quasi = {o.name: [] for o in ALL_OUTPUTS}
-    levels = sorted(MODEL_CLASSES)
-    for level in levels:
-        try:
-            descriptions = MODEL_CLASSES[level](drive, dict(params, fidelity=level)).output_descriptions()
-        except Exception as exc:  # a level under construction must not break the build
-            print(f"warning: cannot describe fidelity {level}: {exc}", file=sys.stderr)
-            continue
-        for name, text in descriptions.items():
-            if name in quasi and text.startswith(QUASI_STATIC):
-                quasi[name].append(level)
-    notes = {}
-    for o in ALL_OUTPUTS:
-        text = f"{o.description} [{o.unit or '1'}]"
-        q = quasi[o.name]
-        computed = [k for k in levels if k not in q]
-        if q:
-            text += ("; quasi-static estimate at fidelity " + ", ".join(map(str, q))
-                     + (", computed at " + ", ".join(map(str, computed)) if computed else ""))
-        notes[o.name] = text
-    notes.update({o.name: f"{o.description} [{o.unit}]" for o in MOTOR_OUTPUTS})
-    return {"units": units, "display": display, "output_notes": notes, "levels": levels,
-            "names": P.FIDELITY_NAMES, "version": chainmodel.__version__,
-            "parameters": {p.name: p for p in P.PARAMETERS}}
+# what the modelDescription completion needs: chainmodel.fmu_model_description (tested there)
+from chainmodel.fmu_model_description import (BASE, CAPABILITIES, DISPLAY, SPEED_DISPLAY,  # noqa: E402,F401
+                                              DescriptionError, base_unit, fmt, library_metadata)
+from chainmodel.fmu_model_description import complete_model_description as _complete  # noqa: E402
 
 
 def absolute_self_references(package: Path) -> list[str]:
@@ -187,100 +100,29 @@ def absolute_self_references(package: Path) -> list[str]:
 
 # --- modelDescription.xml --------------------------------------------------------------------
 
+def model_structure_dependencies() -> dict[str, list[str]]:
+    """Each output's direct input dependencies for ModelStructure
+    (``chainmodel.fmu_model_description.output_dependencies``: found by perturbing the library's
+    session at every level), computed in a subprocess with the plain-numpy kernels
+    (CHAINMODEL_NUMBA=0; the same table as compiled, 1 s instead of compiling level 3 here)."""
+    import os
+    import subprocess
+    code = ("import json; from chainmodel.fmu_model_description import output_dependencies; "
+            "print(json.dumps(output_dependencies()))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=HERE,
+                          env=dict(os.environ, CHAINMODEL_NUMBA="0"))
+    if proc.returncode != 0:
+        raise SystemExit("build_fmu: cannot find the outputs' input dependencies:\n"
+                         + proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
 def complete_model_description(xml: bytes, meta: dict) -> bytes:
-    """Add what pythonfmu does not write (see the module docstring)."""
-    root = ET.fromstring(xml)
-    root.set("variableNamingConvention", "structured")
-    root.set("generationTool", root.get("generationTool", "PythonFMU") + " + build_fmu.py")
-    root.set("version", meta["version"])
-    levels = ", ".join(f"{k} ({meta['names'][k]})" for k in meta["levels"])
-    root.set("description", root.get("description", "") + f" Levels in this build: {levels}.")
-    cosim = root.find("CoSimulation")
-    for key, value in CAPABILITIES.items():
-        cosim.set(key, value)
-
-    variables = root.find("ModelVariables").findall("ScalarVariable")
-    units, display, params = meta["units"], meta["display"], meta["parameters"]
-    used: dict[str, set] = {}
-    outputs = []
-    for index, sv in enumerate(variables, start=1):
-        name = sv.get("name")
-        typ = next(iter(sv))
-        causality = sv.get("causality") or "local"
-        if causality == "output":
-            outputs.append(index)
-            sv.set("description", meta["output_notes"][name])
-            sv.set("variability", "continuous")
-            sv.set("initial", "calculated")
-        elif causality == "input":
-            sv.set("variability", "continuous")
-            sv.attrib.pop("initial", None)
-        elif causality == "parameter":
-            sv.set("initial", "exact")
-        if not sv.get("description"):
-            raise SystemExit(f"build_fmu: variable {name} has no description")
-        if typ.tag == "Real":
-            unit = units.get(name)
-            if unit is None:
-                raise SystemExit(f"build_fmu: no unit known for Real variable {name}")
-            typ.set("unit", unit)
-            used.setdefault(unit, set())
-            if name in display:
-                du = display[name]
-                if du not in DISPLAY or DISPLAY[du][0] != unit:
-                    raise SystemExit(f"build_fmu: display unit {du!r} of {name} is not defined "
-                                     f"for unit {unit!r}; add it to build_fmu.DISPLAY")
-                typ.set("displayUnit", du)
-                used[unit].add(du)
-            if name in params:   # exact default (pythonfmu rounds to 16 digits)
-                typ.set("start", fmt(meta.get("defaults", {}).get(name, params[name].default)))
-            elif typ.get("start") is not None:
-                typ.set("start", fmt(float(typ.get("start"))))
-        if name in params and typ.tag in ("Real", "Integer"):
-            p = params[name]
-            conv = fmt if typ.tag == "Real" else (lambda v: str(int(v)))
-            if p.minimum is not None:
-                typ.set("min", conv(p.minimum))
-            if p.maximum is not None:
-                typ.set("max", conv(p.maximum))
-    # every unit the build knows a display unit for offers it
-    for du, (unit, _) in DISPLAY.items():
-        if unit in used:
-            used[unit].add(du)
-
-    unit_defs = ET.Element("UnitDefinitions")
-    for unit in sorted(used):
-        u = ET.SubElement(unit_defs, "Unit", name=unit)
-        ET.SubElement(u, "BaseUnit", {k: str(v) for k, v in sorted(base_unit(unit).items())})
-        for du in sorted(used[unit]):
-            ET.SubElement(u, "DisplayUnit", name=du, factor=fmt(DISPLAY[du][1]))
-
-    structure = ET.Element("ModelStructure")
-    outs = ET.SubElement(structure, "Outputs")
-    init = ET.SubElement(structure, "InitialUnknowns")
-    for index in outputs:   # no dependencies attribute: may depend on every input (feedthrough)
-        ET.SubElement(outs, "Unknown", index=str(index))
-        ET.SubElement(init, "Unknown", index=str(index))
-
-    default = root.find("DefaultExperiment")
-    if default is None:
-        raise SystemExit("build_fmu: the adapter defines no default experiment")
-    for key in ("startTime", "stopTime", "stepSize", "tolerance"):
-        if default.get(key) is not None:
-            default.set(key, fmt(float(default.get(key))))
-
-    # schema order: CoSimulation, UnitDefinitions, LogCategories, DefaultExperiment,
-    # ModelVariables, ModelStructure
-    keep = {child.tag: child for child in root}
-    for child in list(root):
-        root.remove(child)
-    for tag in ("CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment",
-                "ModelVariables", "ModelStructure"):
-        node = {"UnitDefinitions": unit_defs, "ModelStructure": structure}.get(tag, keep.get(tag))
-        if node is not None:
-            root.append(node)
-    ET.indent(root, space="  ")
-    return b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="utf-8")
+    """Add what pythonfmu does not write (chainmodel.fmu_model_description)."""
+    try:
+        return _complete(xml, meta)
+    except DescriptionError as exc:
+        raise SystemExit(f"build_fmu: {exc}") from None
 
 
 # --- documentation ---------------------------------------------------------------------------
@@ -515,6 +357,7 @@ def build(out: Path = DEFAULT_OUT, quiet: bool = False,
 
     out = Path(out).resolve()
     meta = library_metadata()
+    meta["dependencies"] = model_structure_dependencies()
     defaults = dict(defaults or {})
     if defaults:
         from chainmodel import parameters as P
@@ -526,6 +369,7 @@ def build(out: Path = DEFAULT_OUT, quiet: bool = False,
         shutil.copytree(HERE / "chainmodel", vendor / "chainmodel",
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
         shutil.copy2(ADAPTER, vendor / "ChainDrive.py")
+        shutil.copy2(ADAPTER.with_name("embedding.py"), vendor / "embedding.py")
         if defaults:
             (vendor / "defaults.json").write_text(json.dumps(meta["defaults"], sort_keys=True))
         bid = build_id(vendor)

@@ -36,7 +36,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["HOSTS", "HostRun", "HostUnavailable", "run_fmu", "host_versions", "grid"]
+__all__ = ["HOSTS", "HostRun", "HostUnavailable", "run_fmu", "host_versions", "grid", "master_loop",
+           "FmpyBinding", "LibcosimBinding"]
 
 HOSTS = ("fmpy", "libcosim")
 
@@ -139,6 +140,95 @@ def run_fmu(fmu: str | Path, host: str = "fmpy", *, stop_time: float, step_size:
     return HostRun(host, version, times, {n: data[:, k].copy() for k, n in enumerate(names)})
 
 
+# --- the master loop, one for every host -----------------------------------------------------
+
+def master_loop(binding, times, u, data, *, feedthrough: bool, progress=None) -> int:
+    """The fixed-step master loop of every run here and of :class:`chainmodel.fmu.FMUSession`.
+
+    ``binding``: the host's calls (:class:`FmpyBinding`, :class:`LibcosimBinding`) -
+    ``set_inputs(row)``, ``step(t, h) -> bool``, ``read(out_row) -> bool``. ``u[k]``: the inputs
+    at ``times[k]``; ``data[k]`` receives the outputs at ``times[k]`` (k >= 1). Two call orders:
+
+    * ``feedthrough=False`` (libcosim's, :func:`run_fmu`): the inputs of t_(k-1) set, the step
+      from t_(k-1), the outputs at t_k read under the inputs held since t_(k-1);
+    * ``feedthrough=True`` (``simulate_fmu``): the step from t_(k-1), then the inputs of t_k set
+      and the outputs read, recomputed for them (direct feedthrough).
+
+    Returns ``len(times)``, or the index of the point whose step, set or read failed."""
+    set_inputs, step, read = binding.set_inputs, binding.step, binding.read
+    t = times.tolist()     # Python floats: ctypes argtypes convert them directly
+    update = progress.update if progress is not None else None
+    for i in range(1, len(t)):
+        if not feedthrough and not set_inputs(u[i - 1]):
+            return i
+        if not step(t[i - 1], t[i] - t[i - 1]):
+            return i
+        if feedthrough and not set_inputs(u[i]):
+            return i
+        if not read(data[i]):
+            return i
+        if update is not None:
+            update(t[i])
+    return len(times)
+
+
+class FmpyBinding:
+    """An fmpy FMU2Slave's fmi2DoStep / fmi2SetReal / fmi2GetReal for :func:`master_loop`,
+    called directly with buffers made once (fmpy's ``doStep``/``setReal``/``getReal`` build
+    ctypes arrays and check the status in Python on every call: about a third of a step's cost
+    at 0.1 ms). A call fails when its status is above fmi2Warning (the FMU logged why)."""
+
+    def __init__(self, fmu, in_vr, out_vr):
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference, fmi2Warning
+        n_in, n_out = len(in_vr), len(out_vr)
+        comp, dll = fmu.component, fmu.dll
+        do_step, set_real, get_real = dll.fmi2DoStep, dll.fmi2SetReal, dll.fmi2GetReal
+        vr_in = (fmi2ValueReference * n_in)(*in_vr)
+        vr_out = (fmi2ValueReference * n_out)(*out_vr)
+        buf_in, buf_out = (fmi2Real * n_in)(), (fmi2Real * n_out)()
+        view_in = np.ctypeslib.as_array(buf_in) if n_in else None
+        view_out = np.ctypeslib.as_array(buf_out)
+        warning = fmi2Warning
+
+        def set_inputs(row) -> bool:
+            if not n_in:
+                return True
+            view_in[:] = row
+            return set_real(comp, vr_in, n_in, buf_in) <= warning
+
+        def step(t, h) -> bool:
+            return do_step(comp, t, h, 1) <= warning
+
+        def read(out) -> bool:
+            if get_real(comp, vr_out, n_out, buf_out) > warning:
+                return False
+            out[:] = view_out
+            return True
+
+        self.set_inputs, self.step, self.read = set_inputs, step, read
+
+
+class LibcosimBinding:
+    """One slave of a libcosim execution for :func:`master_loop`: inputs through an override
+    manipulator, ``execution.step()`` (libcosim keeps its own time: the loop's t and h are its
+    grid), outputs kept by a time-series observer and read after the run (:meth:`collect`)."""
+
+    def __init__(self, execution, manipulator, index, in_vr):
+        self.execution, self.manipulator, self.index, self.in_vr = \
+            execution, manipulator, index, list(in_vr)
+
+    def set_inputs(self, row) -> bool:
+        if self.in_vr:
+            self.manipulator.slave_real_values(self.index, self.in_vr, [float(v) for v in row])
+        return True
+
+    def step(self, t, h) -> bool:
+        return bool(self.execution.step())
+
+    def read(self, out) -> bool:
+        return True
+
+
 def _typed(by_name, values: Mapping[str, Any]) -> dict[str, tuple[list, list]]:
     groups: dict[str, tuple[list, list]] = {}
     for name, value in values.items():
@@ -181,11 +271,10 @@ def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> n
         slave.getReal(out_vr)              # ... and after setting the initial values
         slave.exitInitializationMode()
         data[0] = slave.getReal(out_vr)
-        for k in range(1, len(times)):
-            set_inputs(k - 1)
-            slave.doStep(currentCommunicationPoint=float(times[k - 1]),
-                         communicationStepSize=float(times[k] - times[k - 1]))
-            data[k] = slave.getReal(out_vr)
+        u = np.column_stack([table[n] for n in table]) if table else np.empty((len(times), 0))
+        k = master_loop(FmpyBinding(slave, in_vr, out_vr), times, u, data, feedthrough=False)
+        if k < len(times):
+            raise RuntimeError(f"fmpy step to t = {times[k]:.9g} s failed")
         slave.terminate()
     finally:
         if slave.component is not None:
@@ -225,12 +314,12 @@ def _run_libcosim(fmu, md, by_name, names, times, step_ns, table, start_values) 
     for vr in out_vr:
         observer.start_time_series(index, vr, CosimVariableType.REAL)
     in_vr = [by_name[n].valueReference for n in table]
-    for k in range(1, len(times)):
-        if in_vr:
-            manipulator.slave_real_values(index, in_vr, [float(table[n][k - 1]) for n in table])
-        if not execution.step():
-            raise RuntimeError(f"libcosim step to t = {times[k]:.9g} s failed")
+    u = np.column_stack([table[n] for n in table]) if table else np.empty((len(times), 0))
     data = np.empty((len(times), len(names)))
+    k = master_loop(LibcosimBinding(execution, manipulator, index, in_vr), times, u, data,
+                    feedthrough=False)
+    if k < len(times):
+        raise RuntimeError(f"libcosim step to t = {times[k]:.9g} s failed")
     for j, vr in enumerate(out_vr):
         data[:, j] = _real_samples(observer, index, vr, len(times))
     execution.stop()

@@ -40,14 +40,15 @@ Errors
     and a warning is logged: never NaN.
 
 The adapter imports its own copy of ``chainmodel`` from ``resources/_vendor/chainmodel`` under a
-private module name, so another ``chainmodel`` in the host process never gets mixed in.
+private module name, so another ``chainmodel`` in the host process never gets mixed in. That and
+every other workaround for the host and pythonfmu (exit handling, reference counts, messages for
+a misconfigured embedding) live in ``embedding.py`` beside this file; the co-simulation itself
+(model, stepper, inputs, acceleration estimate, state, coupling watch) is
+``chainmodel.cosim.CosimSession``: this module maps FMI variables onto them.
 """
 
 from __future__ import annotations
 
-import ctypes
-import hashlib
-import importlib
 import importlib.util
 import json
 import math
@@ -74,224 +75,27 @@ DEFAULT_EXPERIMENT = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=
                                        tolerance=1e-6)
 
 
-# --- the embedding: one build among others, in someone else's process ------------------------
-
-#: what a C/C++ host must provide (docs/fmu.md, "Hosts")
-_HOST_RECIPE = ("the ChainDrive FMU runs in the Python its host embeds: it needs Python >= 3.11 "
-                "with numpy and scipy importable (numba too, for speed); in a C/C++ host the "
-                "FMU's launcher starts the Python that built it, or the one CHAINDRIVE_PYTHON "
-                "names (a python executable or a libpython); an FMU built without the launcher "
-                "needs LD_PRELOAD (libpython), PYTHONHOME (its prefix) and PYTHONPATH (a "
-                "site-packages with numpy, scipy and numba): see the Hosts section of the FMU's "
-                "documentation (docs/fmu.md)")
-
-
-def _embedding_error(problem: str) -> ImportError:
-    """An ImportError for a misconfigured embedding, also written to stderr: pythonfmu passes
-    it to the host's logger only when logging is on, and then as fmi2Fatal."""
-    message = f"ChainDrive FMU: {problem}. {_HOST_RECIPE}"
-    try:
-        print(message, file=sys.stderr, flush=True)
-    except Exception:  # pragma: no cover - no usable stderr in the host
-        pass
-    return ImportError(message)
-
-
-if sys.version_info < (3, 11):
-    raise _embedding_error(f"the embedded Python is {sys.version.split()[0]} "
-                           f"({sys.executable or 'no executable'})")
-
-
-def balance_namespace_reference(namespace: dict) -> None:
-    """Give the entry module's namespace the reference pythonfmu 0.7 releases without having
-    taken it (findClass: Py_DECREF of PyModule_GetDict's borrowed result, once per
-    fmi2Instantiate). Called by the entry module each time its code runs (build_fmu.SHIM);
-    the first run, the import, adds one spare reference that is never needed."""
-    try:
-        ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
-    except Exception:  # pragma: no cover - not CPython: no reference counts to balance
-        pass
-
-
-#: pythonfmu versions whose wrapper leaks the sys.path string it inserts per fmi2Instantiate
-_PATH_LEAKING_WRAPPERS = ("0.6.5", "0.6.6", "0.6.7", "0.6.8", "0.6.9", "0.7.0")
-_WRAPPER_LEAKS_PATH = False
-
-
-_BUILD_INFO: dict = {}
-
-
-def _build_info(resources: Path) -> dict:
-    """``{"id", "pythonfmu"}`` written by build_fmu.py; for an adapter run from a bare folder
-    (benchmarks load fmu_src/ChainDrive.py next to a symlinked package) a path hash as id."""
-    key = str(resources)
-    if key not in _BUILD_INFO:
+def _load_embedding():
+    """fmu_src/embedding.py (resources/_vendor/embedding.py in the FMU): the workarounds for
+    the host and pythonfmu, loaded under this module's name + ``_embedding``."""
+    name = __name__ + "_embedding"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            name, os.path.join(os.path.dirname(os.path.abspath(__file__)), "embedding.py"))
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
         try:
-            _BUILD_INFO[key] = json.loads((resources / "_vendor" / "build.json").read_text())
-        except (OSError, ValueError):
-            _BUILD_INFO[key] = {"id": "dev_" + hashlib.sha1(str(resources.resolve()).encode())
-                                .hexdigest()[:16], "pythonfmu": None}
-    return _BUILD_INFO[key]
-
-
-def _build_defaults(resources: Path) -> dict:
-    """Parameter defaults this build replaces (``build_fmu.py --default``), else {}."""
-    try:
-        return json.loads((resources / "_vendor" / "defaults.json").read_text())
-    except (OSError, ValueError):
-        return {}
-
-
-#: log messages already passed to pythonfmu, see ChainDrive.log
-_MESSAGES: dict = {}
-_MESSAGES_MAX = 4096
-
-
-def _repoint(alias: str, root: Path) -> None:
-    """Point the loaded package ``alias`` and its subpackages at ``root``. Hosts such as
-    fmpy.simulate_fmu delete their extraction folder after a run; the next instance of the same
-    build comes from a fresh folder, and modules or data files the package loads lazily must be
-    found there."""
-    for name, module in list(sys.modules.items()):
-        if module is None or not (name == alias or name.startswith(alias + ".")):
-            continue
-        rel = name.split(".")[1:]
-        if hasattr(module, "__path__"):
-            folder = root.joinpath(*rel)
-            spec = importlib.util.spec_from_file_location(
-                name, folder / "__init__.py", submodule_search_locations=[str(folder)])
-            module.__path__ = [str(folder)]
-        else:
-            spec = importlib.util.spec_from_file_location(
-                name, root.joinpath(*rel[:-1], rel[-1] + ".py"))
-        module.__spec__, module.__loader__, module.__file__ = spec, spec.loader, spec.origin
-
-
-def _vendored_chainmodel(resources: str):
-    """Import ``resources/_vendor/chainmodel`` as a private package and return its modules.
-
-    The package is registered in ``sys.modules`` as ``_chaindrive_<build id>`` (needed for its
-    relative imports), never as ``chainmodel``: a host process may have its own chainmodel
-    imported or first on sys.path, and a different build of the FMU loaded in the same process
-    must not share code with this one. Instances of one build share it, whichever folder each
-    was extracted to."""
-    resources = Path(resources)
-    root = resources / "_vendor" / "chainmodel"
-    init = root / "__init__.py"
-    if not init.is_file():
-        raise _embedding_error(f"this FMU's copy of the chainmodel package is missing ({root}); "
-                               "the resources folder the host passed is incomplete")
-    global _WRAPPER_LEAKS_PATH
-    info = _build_info(resources)
-    _WRAPPER_LEAKS_PATH = info.get("pythonfmu") in _PATH_LEAKING_WRAPPERS
-    alias = "_chaindrive_" + info["id"]
-    if alias not in sys.modules:
-        spec = importlib.util.spec_from_file_location(alias, init,
-                                                      submodule_search_locations=[str(root)])
-        package = importlib.util.module_from_spec(spec)
-        sys.modules[alias] = package
-        try:
-            spec.loader.exec_module(package)
-        except BaseException as exc:
-            for name in [n for n in sys.modules if n == alias or n.startswith(alias + ".")]:
-                del sys.modules[name]
-            if isinstance(exc, ImportError) and exc.name and exc.name.split(".")[0] in (
-                    "numpy", "scipy"):
-                raise _embedding_error(f"{exc.name} cannot be imported in the embedded Python "
-                                       f"{sys.version.split()[0]} (sys.prefix {sys.prefix}): "
-                                       f"{exc}") from exc
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
             raise
-    elif not Path(sys.modules[alias].__path__[0]).is_dir():
-        _repoint(alias, root)
-    mod = {name: importlib.import_module(f"{alias}.{name}")
-           for name in ("parameters", "models", "integrate", "scene", "fidelity_auto",
-                        "validity")}
-    mod["package"] = sys.modules[alias]
-    return mod
+    return sys.modules[name]
 
 
-def _tidy_sys_path(resources: str) -> None:
-    """Take this FMU's resources folder off sys.path. pythonfmu 0.7 inserts it at sys.path[0]
-    at every fmi2Instantiate (so the entry module and its pythonfmu copy import) and keeps one
-    reference to each inserted string forever: a host's own imports would search our folder
-    first, and a long-running host collected one entry per instance. Everything of ours is
-    imported by then. The string's stray reference is released where the build shipped a
-    wrapper known to leak it and the count proves it is that one: after the list lets go, the
-    leaked reference + this loop's name + getrefcount's argument = 3 (the first inserted string
-    is also a key of sys.path_importer_cache and is left alone)."""
-    path = sys.path
-    for index in range(len(path) - 1, -1, -1):
-        item = path[index]
-        if item != resources:
-            continue
-        del path[index]
-        if (_WRAPPER_LEAKS_PATH and type(item) is str and sys.getrefcount(item) == 3
-                and not any(key is item for key in sys.path_importer_cache)):
-            try:
-                ctypes.pythonapi.Py_DecRef(ctypes.py_object(item))
-            except Exception:  # pragma: no cover - not CPython
-                pass
-        del item
-
-
-_WRAPPERS: dict = {}
-
-
-def _wrapper_hosts_us(resources: str, model_identifier: str) -> bool:
-    """True when this FMU's own pythonfmu wrapper library is loaded in the process, i.e. we
-    were instantiated through FMI (not by pythonfmu's builder or a test calling the class).
-    On Linux it also makes the process exit safe (below); elsewhere it only checks the file.
-
-    Exit safety (Linux).
-
-    pythonfmu 0.7's wrapper keeps its interpreter guard in a static ``std::shared_ptr pyState``
-    and releases it in an ELF destructor (``onLibraryUnload`` -> ``finalizePythonInterpreter``).
-    The library is never really unloaded (its C++ unique symbols make it NODELETE, whatever
-    the host's dlclose), so that destructor runs at process exit, from ``_dl_fini`` - after the
-    C++ static destructor of ``pyState`` itself ran from ``exit()``'s handler list and freed the
-    guard. The destructor then releases the freed 128-byte block a second time; depending on
-    the heap's state that is harmless or aborts the process ("corrupted double-linked list",
-    PythonFMU issue #229 shows the same read in valgrind). Registering the library's own
-    ``finalizePythonInterpreter`` with ``__cxa_atexit`` now - after the library's static
-    constructors registered ``pyState``'s destructor - runs it first: it releases the guard
-    once and leaves ``pyState`` empty, so both later destructors find nothing to release. The
-    library is pinned (RTLD_NODELETE) so the registered address stays valid."""
-    binaries = Path(resources).parent / "binaries"
-    if not sys.platform.startswith("linux"):
-        # Windows: DllMain finalizes before the DLL's static destructors run: nothing to do
-        return any(binaries.glob(f"*/{model_identifier}.*"))
-    lib = binaries / "linux64" / f"{model_identifier}.so"
-    try:
-        key = (lib.stat().st_dev, lib.stat().st_ino)
-    except OSError:
-        return False
-    if key not in _WRAPPERS:
-        try:   # a handle only if the host loaded this very file; pinned from now on
-            wrapper = ctypes.CDLL(str(lib), mode=os.RTLD_NOW | os.RTLD_NOLOAD | os.RTLD_NODELETE)
-        except OSError:
-            return False   # not loaded: pythonfmu's builder, or a test using the class
-        try:
-            finalize = wrapper.finalizePythonInterpreter
-            libc = ctypes.CDLL(None)
-            libc.__cxa_atexit.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-            libc.__cxa_atexit(ctypes.cast(finalize, ctypes.c_void_p), None, None)
-        except AttributeError:   # the launcher (fmu_src/launcher) does it itself, or another
-            pass                 # wrapper than pythonfmu 0.7's
-        _WRAPPERS[key] = wrapper
-    return True
-
-
-def _fmi_text(message: str) -> str:
-    """FMI log messages are printf format strings: escape '%'."""
-    return str(message).replace("%", "%%")
-
-
-def _why(exc: BaseException) -> str:
-    """The library's ValueError / SimulationDiverged messages are sentences for users; anything
-    else is a defect and keeps its type name."""
-    if isinstance(exc, ValueError) or type(exc).__name__ == "SimulationDiverged":
-        return str(exc)
-    return f"{type(exc).__name__}: {exc}"
+_E = _load_embedding()
+#: called by the entry module (build_fmu.SHIM)
+balance_namespace_reference = _E.balance_namespace_reference
+_fmi_text, _why, _embedding_error = _E.fmi_text, _E.why, _E.embedding_error
 
 
 def parameter_description(p) -> str:
@@ -320,14 +124,16 @@ class ChainDrive(Fmi2Slave):
         super().__init__(**kwargs)
         if not self.resources:
             raise _embedding_error("the host passed no resources folder (fmuResourceLocation)")
-        lib = _vendored_chainmodel(self.resources)
-        if _wrapper_hosts_us(self.resources, type(self).__name__):
-            _tidy_sys_path(self.resources)
+        lib = _E.vendored_chainmodel(self.resources)
+        if _E.wrapper_hosts_us(self.resources, type(self).__name__):
+            _E.tidy_sys_path(self.resources)
         self._P, self._M, self._I, self._S = (lib["parameters"], lib["models"],
                                               lib["integrate"], lib["scene"])
         self._lib_auto = lib["fidelity_auto"]
         self._validity = lib["validity"]
         self._monitor = None         # chainmodel.validity.Monitor of the run (fmi2Warning logs)
+        self._cosim = lib["cosim"]
+        self._session = self._cosim.CosimSession(lib, "ChainDrive")
         self.version = getattr(lib["package"], "__version__", None)
         self.default_experiment = DEFAULT_EXPERIMENT
 
@@ -365,7 +171,7 @@ class ChainDrive(Fmi2Slave):
             for spec in motor.MOTOR_OUTPUTS)
         kinds = {float: (Real, self._real), int: (Integer, self._int),
                  bool: (Boolean, self._bool), str: (String, self._str)}
-        defaults = _build_defaults(Path(self.resources))
+        defaults = _E.build_defaults(Path(self.resources))
         for p in self._P.PARAMETERS:
             cls, table = kinds[p.kind]
             variability = Fmi2Variability.fixed if p.structural else Fmi2Variability.tunable
@@ -391,7 +197,27 @@ class ChainDrive(Fmi2Slave):
                 **auto),
             self._add(Real, "auto.load_torque", 0.0, self._real, description=(
                 "load torque auto chooses for [N.m] (0: the input at initialization)"), **auto))
-        self._auto_set = frozenset(self._auto_vrs)
+        # the coupling to a motor model (chainmodel.cosim; docs/fmu.md "In a system model")
+        self._coupling_vrs = (
+            self._add(Real, "coupling.motor_inertia", 0.0, self._real, description=(
+                "inertia of the motor rotor a master couples to input_shaft.angle/.speed "
+                "(angle causality) [kg.m2], for coupling.max_step and the message of an "
+                "unstable coupling (0: unknown)"), **auto),
+            self._add(Boolean, "input_shaft.include_drive_inertia", True, self._bool,
+                      description=(
+                          "input_shaft.torque includes the drive's inertia torque (the part "
+                          "proportional to the input's acceleration, at fidelity 0 and with "
+                          "input_shaft.rigid); false leaves it to the motor model and removes "
+                          "the feedthrough I_eff/h of input_shaft.speed"), **auto))
+        self._max_step_vr = self._add(
+            Real, "coupling.max_step", 0.0, self._real, causality=Fmi2Causality.calculatedParameter,
+            variability=Fmi2Variability.fixed, initial=Fmi2Initial.calculated, description=(
+                "largest communication step [s] at which a Jacobi master holds a motor rotor of "
+                "coupling.motor_inertia on the input-shaft spring (angle causality): "
+                f"{self._cosim.JACOBI_CONSTANT:g} / omega_c, omega_c = sqrt(k_r (1/J + "
+                "1/I_driver)); Gauss-Seidel holds about 3.5 times more; 0 where no such limit "
+                "applies (coupling.motor_inertia 0, fidelity 0, input_shaft.rigid)"))
+        self._auto_set = frozenset(self._auto_vrs + self._coupling_vrs)
         self._output_names = [name for _, name in self._output_map]
         self._output_vrs = frozenset(vr for vr, _ in self._output_map) | frozenset(self._motor_vrs)
         self._output_vr_list = [vr for vr, _ in self._output_map]   # ALL_OUTPUTS order
@@ -405,8 +231,7 @@ class ChainDrive(Fmi2Slave):
         self._model_params: dict | None = None  # validated parameters the model was built with
         self._params_changed = True
         self._stale = False          # outputs must be recomputed (inputs set) before read
-        self._prev_t = None          # previous communication point and the speed set there
-        self._prev_speed = 0.0
+        self._told_coupling = False  # an unstable coupling was written to stderr
         self._warned_outputs = False
 
     def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
@@ -415,9 +240,9 @@ class ChainDrive(Fmi2Slave):
         ``msg`` with PyObject_GetAttr and never releases it), so a message repeated at every
         instantiation or step costs memory once, not every time."""
         if type(msg) is str:
-            shared = _MESSAGES.get(msg)
-            if shared is None and len(_MESSAGES) < _MESSAGES_MAX:
-                shared = _MESSAGES[msg] = msg
+            shared = _E.MESSAGES.get(msg)
+            if shared is None and len(_E.MESSAGES) < _E.MESSAGES_MAX:
+                shared = _E.MESSAGES[msg] = msg
             msg = shared if shared is not None else msg
         super().log(msg, status, category)
 
@@ -520,89 +345,58 @@ class ChainDrive(Fmi2Slave):
     def _parameter_values(self) -> dict:
         return {p.name: table[vr] for vr, p, table in self._params}
 
-    def _inputs_at(self, t: float):
-        """Inputs at communication point t, with the backward-difference acceleration."""
+    def _sync_inputs(self):
+        """The input values of the value table into the session."""
         real = self._real
-        speed = real[self._in_speed]
-        if self._prev_t is not None and t > self._prev_t:
-            acc = (speed - self._prev_speed) / (t - self._prev_t)
-        else:
-            acc = 0.0
-        return self._M.Inputs(real[self._in_angle], speed, real[self._in_torque], acc)
+        self._session.set_inputs(real[self._in_angle], real[self._in_speed],
+                                 real[self._in_torque], real[self._in_motor])
+        return self._session
 
     def _build(self, t: float, state=None):
         """Validate the parameters and build model and stepper at time t (raises ValueError)."""
         P = self._P
         params = P.validate(self._parameter_values())
         on, outputs, accuracy, speed, load = (self._table_of[vr][vr] for vr in self._auto_vrs)
+        session = self._sync_inputs()
         if on:
-            u0 = self._inputs_at(t)
+            u0 = session.inputs(t)
             params, choice = self._lib_auto.choose_parameters(
                 params, speed if speed else u0.speed, load if load else u0.torque,
                 outputs or None, accuracy)
             if choice.message != getattr(self, "_auto_message", None):
                 self._auto_message = choice.message
                 self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
-        level = params["fidelity"]
-        classes = self._M.MODEL_CLASSES
-        if level not in classes:
-            raise ValueError(
-                f"parameter fidelity = {level} ({P.FIDELITY_NAMES[level]}) is not available in "
-                "this build of the FMU; available: "
-                + ", ".join(f"{k} ({P.FIDELITY_NAMES[k]})" for k in sorted(classes)))
-        drive = self._S.drive_from_parameters(params, "ChainDrive")
-        model = self._M.build_model(level, drive, params)
-        u = self._inputs_at(t)
-        x0 = None if state is None else state.x
-        stepper = self._I.make_stepper(model, params["solver.method"], t, u,
-                                       step=params["solver.step"], rtol=params["solver.rtol"],
-                                       tolerance=params["solver.tolerance"], x0=x0)
-        if state is not None:
-            stepper.set_state(state)
-        else:   # a new run: its validity checks start afresh
-            self._monitor = self._validity.Monitor(drive, params, level, self._output_names)
-        self._stepper, self._model_params = stepper, params
+        J_vr, inertia_vr = self._coupling_vrs
+        session.motor_inertia = self._real[J_vr]
+        if not (session.motor_inertia >= 0 and math.isfinite(session.motor_inertia)):
+            raise ValueError(f"parameter coupling.motor_inertia = {session.motor_inertia!r} "
+                             "kg.m2 is not valid; valid: >= 0 (0: unknown)")
+        session.include_drive_inertia = bool(self._bool[inertia_vr])
+        built = session.build(params, t, state)
+        h_max = (self._cosim.stable_step(session.motor_inertia, params)
+                 if session.motor_inertia > 0 else math.inf)
+        self._real[self._max_step_vr] = h_max if math.isfinite(h_max) else 0.0
+        if state is None:   # a new run: its validity checks start afresh
+            self._monitor = self._validity.Monitor(built.drive, params, built.level,
+                                                   self._output_names)
+        self._stepper, self._model_params = built.stepper, params
         self._params_changed = False
-        return stepper
+        return built.stepper
 
     def _store_row(self, row, fresh=False):
         """The outputs row of the stepper (ALL_OUTPUTS order) into the value table; returns the
         values as a list."""
         values = row.tolist()
         self._real.update(zip(self._output_vr_list, values))
-        self._store_motor(fresh)
+        self._real.update(zip(self._motor_vrs, self._session.motor_values(fresh)))
         return values
-
-    def _store_motor(self, fresh=False):
-        """motor.angle, motor.speed: the rotor's state in torque causality; in angle causality
-        the input shaft's angle and speed (``fresh``: as just set, else held to the step's end)."""
-        st, real = self._stepper, self._real
-        if st is not None and hasattr(st.model, "motor_outputs"):
-            values = st.model.motor_outputs(st.x)
-        elif st is not None and not fresh:
-            u = st.inputs
-            values = (u.angle, u.speed)
-        else:
-            values = (real[self._in_angle], real[self._in_speed])
-        real.update(zip(self._motor_vrs, values))
-
-    def _acceleration(self, t: float, speed: float) -> float:
-        """Backward difference of the speed input between communication points (0 at the
-        first point)."""
-        if self._prev_t is not None and t > self._prev_t:
-            return (speed - self._prev_speed) / (t - self._prev_t)
-        return 0.0
 
     def _refresh_outputs(self):
         """Outputs for the current state and the inputs set since (direct feedthrough)."""
         try:
             if self._stepper is None or (self._params_changed and not self._initialized):
                 self._build(self._t0)
-            st = self._stepper
-            real = self._real
-            speed = real[self._in_speed]
-            row = st.outputs_held(real[self._in_angle], speed, self._acceleration(st.t, speed),
-                                  real[self._in_torque])
+            row = self._sync_inputs().outputs()
             bad = [n for n, v in zip(self._output_names, row.tolist()) if not math.isfinite(v)]
             if bad:
                 raise self._M.SimulationDiverged(f"non-finite outputs {', '.join(bad[:5])}")
@@ -639,6 +433,13 @@ class ChainDrive(Fmi2Slave):
                            f"{type(st).__name__} {getattr(st, 'method', '')}; quasi-static "
                            f"estimates at this level: {', '.join(qs) or 'none'}"),
                  Fmi2Status.ok, "logAll")
+        if self._real[self._max_step_vr] > 0:
+            self.log(_fmi_text(
+                f"angle causality: a motor rotor of coupling.motor_inertia = "
+                f"{self._session.motor_inertia:g} kg.m2 on the input-shaft spring holds at "
+                f"communication steps up to coupling.max_step = "
+                f"{self._real[self._max_step_vr]:.3g} s (Jacobi; docs/fmu.md, \"In a system "
+                "model\")"), Fmi2Status.ok, "logAll")
 
     def do_step(self, current_time, step_size):
         st = self._stepper
@@ -659,33 +460,31 @@ class ChainDrive(Fmi2Slave):
             except Exception as exc:
                 self.log(_fmi_text(f"parameter change refused: {_why(exc)}"), Fmi2Status.discard)
                 return False
-        real = self._real
-        speed = real[self._in_speed]
+        session = self._sync_inputs()
+        speed = session.speed
         try:
-            if hasattr(st.model, "motor_outputs"):   # torque causality: motor.torque drives
-                out = st.advance(current_time + step_size, self._M.Inputs(
-                    0.0, 0.0, real[self._in_torque], 0.0, real[self._in_motor]))
-                row = self._output_row(out)
-                speed = st.model.motor_outputs(st.x)[1]   # the validity checks' input speed
-            else:
-                row = st.advance_held(current_time + step_size, real[self._in_angle], speed,
-                                      self._acceleration(current_time, speed),
-                                      real[self._in_torque])
+            row = session.step(current_time, step_size)
         except Exception as exc:   # diverged, bad input, or a model error: discard the step
             self.log(_fmi_text(f"step from t = {current_time:.9g} s over {step_size:.6g} s "
                                f"discarded, the FMU stays at t = {current_time:.9g} s: "
                                f"{_why(exc)}"),
                      Fmi2Status.discard)
+            if isinstance(exc, self._cosim.CouplingUnstable) and not self._told_coupling:
+                # hosts that instantiate with logging off (libcosim) would show only that the
+                # step failed: this one, the system's fault rather than ours, also goes to stderr
+                self._told_coupling = True
+                try:
+                    print(f"ChainDrive FMU ({self.instance_name}): {exc}", file=sys.stderr,
+                          flush=True)
+                except Exception:  # pragma: no cover - no usable stderr in the host
+                    pass
             return False
         values = self._store_row(row)
-        self._prev_t, self._prev_speed = current_time, speed
         self._stale = False
+        if session.torque_causal:   # the validity checks' input speed: the motor rotor's
+            speed = session.motor_values()[1]
         self._check_validity(current_time + step_size, values, speed)
         return True
-
-    def _output_row(self, out: dict):
-        import numpy as np
-        return np.array([out[name] for name in self._output_names])
 
     def _check_validity(self, t, row, speed, found=()):
         """Log as fmi2Warning each validity problem (chainmodel.validity) once, when it first
@@ -702,18 +501,14 @@ class ChainDrive(Fmi2Slave):
 
     # --- FMU state ------------------------------------------------------------------------------
     def _get_fmu_state(self):
-        st = self._stepper
-        s = None
-        if st is not None:
-            ss = st.get_state()
-            u = ss.inputs
-            s = {"t": ss.t, "x": [float(v) for v in ss.x], "h": ss.h,
-                 "inputs": [u.angle, u.speed, u.torque, u.acceleration], "extra": dict(ss.extra)}
+        session = self._session.get_state()
         return {"format": "ChainDrive-1",
                 "real": list(self._real.items()), "int": list(self._int.items()),
                 "bool": list(self._bool.items()), "str": list(self._str.items()),
                 "t0": self._t0, "initialized": self._initialized, "stale": self._stale,
-                "prev_t": self._prev_t, "prev_speed": self._prev_speed, "stepper": s}
+                "prev_t": session["prev_t"], "prev_speed": session["prev_speed"],
+                "stepper": session["stepper"] if self._stepper is not None else None,
+                "watch": session["watch"]}
 
     def _set_fmu_state(self, state):
         if not isinstance(state, dict) or state.get("format") != "ChainDrive-1":
@@ -723,21 +518,18 @@ class ChainDrive(Fmi2Slave):
             for vr, value in state[key]:
                 table[int(vr)] = value
         self._t0 = state["t0"]
-        self._prev_t, self._prev_speed = state["prev_t"], state["prev_speed"]
         self._initialized = state["initialized"]
-        s = state["stepper"]
-        if s is None:
+        session = self._sync_inputs()
+        session.prev_t, session.prev_speed = state["prev_t"], state["prev_speed"]
+        if state["stepper"] is None:
+            session.restore(state, None)
             self._stepper, self._model_params, self._params_changed = None, None, True
         else:
-            import numpy as np
-            saved = self._I.StepperState(s["t"], np.array(s["x"], float), s["h"],
-                                         self._M.Inputs(*s["inputs"]), dict(s["extra"]))
             try:
                 if (self._stepper is None or self._params_changed
                         or self._P.validate(self._parameter_values()) != self._model_params):
-                    self._build(saved.t, saved)
-                else:
-                    self._stepper.set_state(saved)
+                    self._build(state["stepper"]["t"], session.stepper_state(state["stepper"]))
+                session.restore(state, None)
             except Exception as exc:
                 self._fail(f"fmi2SetFMUstate: cannot restore this state: {_why(exc)}")
         self._stale = state["stale"]
@@ -752,66 +544,4 @@ class ChainDrive(Fmi2Slave):
         return json.loads(data.decode("utf-8"))
 
 
-# --- every call from pythonfmu's wrapper ------------------------------------------------------
-
-#: the methods pythonfmu 0.7's wrapper calls on an instance (PySlaveInstance.cpp)
-_ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode",
-                 "do_step", "terminate", "set_real", "set_integer", "set_boolean", "set_string",
-                 "get_real", "get_integer", "get_boolean", "get_string", "_get_fmu_state",
-                 "_set_fmu_state")
-
-
-def _guard(method):
-    """Wrap an entry point so that an exception leaving it is survivable.
-
-    pythonfmu 0.7 turns any exception into fmi2Fatal and, handling it, releases its references
-    to the instance, the class and the log queue - and releases them again in
-    fmi2FreeInstance. Without one extra reference each, the instance is freed while the wrapper
-    still uses it and the host crashes later (at free, or at exit). An exception the adapter did
-    not log itself is logged here first, as an error naming its type."""
-    import functools
-
-    @functools.wraps(method)
-    def entry(self, *args):
-        try:
-            return method(self, *args)
-        except BaseException as exc:
-            if not getattr(exc, "chaindrive_logged", False):
-                self.log(_fmi_text(f"{method.__name__} failed: {type(exc).__name__}: {exc}"),
-                         Fmi2Status.error)
-            try:
-                for obj in (self, type(self), self.log_queue):
-                    ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
-            except Exception:  # pragma: no cover - not CPython
-                pass
-            raise
-    return entry
-
-
-def _never_raise_bytes(method, fallback):
-    """The (de)serialisation hooks are called on the class, with no instance whose references
-    could be balanced: they return a value the next call refuses instead of raising."""
-    import functools
-
-    @functools.wraps(method)
-    def hook(arg):
-        try:
-            return method(arg)
-        except Exception as exc:
-            return fallback(exc)
-    return staticmethod(hook)
-
-
-def _guard_entry_points(cls):
-    for name in _ENTRY_POINTS:
-        setattr(cls, name, _guard(getattr(cls, name)))
-    cls._fmu_state_to_bytes = _never_raise_bytes(
-        cls._fmu_state_to_bytes,
-        lambda exc: json.dumps({"format": "invalid", "reason": repr(exc)}).encode())
-    cls._fmu_state_from_bytes = _never_raise_bytes(
-        cls._fmu_state_from_bytes,
-        lambda exc: {"format": "invalid", "reason": f"not a serialized ChainDrive state: {exc}"})
-    return cls
-
-
-_guard_entry_points(ChainDrive)
+_E.guard_entry_points(ChainDrive)

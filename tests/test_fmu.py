@@ -206,14 +206,20 @@ def test_variables_follow_the_schema_and_the_contract(model_description):
         assert sv.get("initial") == "calculated" and sv[0].get("start") is None
     index = {sv.get("name"): str(i) for i, sv in enumerate(variables, start=1)}
     structure = model_description.find("ModelStructure")
-    for part in ("Outputs", "InitialUnknowns"):
-        assert [u.get("index") for u in structure.find(part)] == [index[n] for n in
-                                                                  OUTPUTS + MOTOR]
+    assert [u.get("index") for u in structure.find("Outputs")] == [index[n] for n in
+                                                                   OUTPUTS + MOTOR]
+    # initial unknowns: the outputs and the calculated parameters (coupling.max_step)
+    calculated = [sv.get("name") for sv in variables
+                  if sv.get("causality") == "calculatedParameter"]
+    assert calculated == ["coupling.max_step"]
+    assert [u.get("index") for u in structure.find("InitialUnknowns")] == sorted(
+        (index[n] for n in OUTPUTS + MOTOR + calculated), key=int)
     assert structure.find("Derivatives") is None
     # parameters: exactly the schema, typed by kind, defaults as start values
     params = {sv.get("name"): sv for sv in variables if sv.get("causality") == "parameter"}
     from chainmodel.fidelity_auto import FMU_PARAMETERS   # fidelity "auto" (issue 11)
-    assert set(params) == set(P.BY_NAME) | set(FMU_PARAMETERS)
+    from chainmodel.cosim import FMU_PARAMETERS as COUPLING   # issue 18 (docs/fmu.md)
+    assert set(params) == set(P.BY_NAME) | set(FMU_PARAMETERS) | set(COUPLING)
     types = {float: "Real", int: "Integer", bool: "Boolean", str: "String"}
     for p in P.PARAMETERS:
         sv = params[p.name]

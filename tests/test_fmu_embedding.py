@@ -279,3 +279,16 @@ def test_an_incomplete_resources_folder_is_reported_not_crashed(tmp_path, capfd)
     with pytest.raises(ImportError, match="copy of the chainmodel package is missing"):
         adapter.ChainDrive(instance_name="x", resources=str(tmp_path))
     assert "PYTHONHOME" in capfd.readouterr().err
+
+
+def test_log_messages_carry_no_percent_sign():
+    """FMI messages are printf formats; libcosim prints them unformatted, so an escaped '%%'
+    showed as "5 %%" (issue 18): the embedding writes the word instead."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("_test_embedding_text",
+                                                  ROOT / "fmu_src" / "embedding.py")
+    embedding = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(embedding)
+    text = embedding.fmi_text("keeps this tension within 5 % of the pitch; 3% more")
+    assert text == "keeps this tension within 5 percent of the pitch; 3 percent more"
+    assert "%" not in embedding.fmi_text("%%d %s 100%")

@@ -209,24 +209,24 @@ def held_acceleration(times, speed) -> np.ndarray:
 
 
 def library_run(model, params, times, angle, speed, torque) -> dict[str, np.ndarray]:
-    """Every output on ``times`` from the library's stepper driven as a fixed-step FMI master
-    drives a co-simulation FMU: the inputs sampled at t_k held over [t_k, t_k+1] (the angle
-    advancing at the held speed, ``Stepper.advance`` with an ``Inputs``), the outputs at t_k+1
-    read before the inputs of t_k+1 are set."""
-    from ..integrate import make_stepper
-    from ..models import Inputs
-    acc = held_acceleration(times, speed)
-    stepper = make_stepper(model, params["solver.method"], float(times[0]),
-                           Inputs(float(angle[0]), float(speed[0]), float(torque[0]), 0.0),
-                           step=params["solver.step"], rtol=params["solver.rtol"],
-                           tolerance=params["solver.tolerance"])
+    """Every output on ``times`` from the library's co-simulation session
+    (:class:`chainmodel.cosim.CosimSession`, what the FMU adapter maps FMI onto) driven as a
+    fixed-step FMI master drives a co-simulation FMU: the inputs sampled at t_k held over
+    [t_k, t_k+1] (the angle advancing at the held speed, the acceleration the backward
+    difference of :func:`held_acceleration`), the outputs at t_k+1 read before the inputs of
+    t_k+1 are set."""
+    from ..cosim import CosimSession
+    session = CosimSession()
+    session.set_inputs(float(angle[0]), float(speed[0]), float(torque[0]))
+    session.build(params, float(times[0]), model=model)
     data = {n: np.empty(len(times)) for n in OUTPUT_NAMES}
-    out = stepper.outputs()
+    out = session.stepper.outputs()
     for i, t in enumerate(times):
         if i:
             k = i - 1
-            out = stepper.advance(float(t), Inputs(float(angle[k]), float(speed[k]),
-                                                   float(torque[k]), float(acc[k])))
+            session.set_inputs(float(angle[k]), float(speed[k]), float(torque[k]))
+            row = session.step(float(times[k]), float(t) - float(times[k]), t_end=float(t))
+            out = dict(zip(OUTPUT_NAMES, row.tolist()))
         for n in OUTPUT_NAMES:
             data[n][i] = out[n]
     return data

@@ -1,0 +1,390 @@
+"""One co-simulated chain drive: what an FMI co-simulation slave of ChainDrive does, without FMI.
+
+:class:`CosimSession` builds the model and stepper of a parameter set (as ``Scene.stepper``
+does), holds the inputs a master sets at a communication point, estimates the input shaft's
+acceleration by backward difference of the speed input, does a communication step, computes
+the outputs for inputs set since (direct feedthrough), and saves and restores its state. The
+FMU adapter (fmu_src/ChainDrive.py) maps FMI variables onto it; ``fmu_test.library_run`` drives
+it as a fixed-step master drives the FMU.
+
+It also watches the coupling (:class:`CouplingWatch`): an explicit co-simulation of a motor
+model's inertia with this drive's stiff input-shaft spring is unstable above a communication
+step of about :data:`JACOBI_CONSTANT` / omega_c (:func:`stable_step`); the session then refuses
+the step with a message that says so and names the step that holds (docs/fmu.md, "In a system
+model"). No physics here beyond that coupling estimate: the models do the rest.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from .models.base import Inputs, SimulationDiverged
+
+#: the inputs of the session (and of the FMU), in the order of :meth:`CosimSession.set_inputs`
+INPUTS = ("input_shaft.angle", "input_shaft.speed", "load.torque")
+
+#: units of the FMU adapter's Real coupling.* variables (build_fmu.py writes them)
+FMU_UNITS = {"coupling.motor_inertia": "kg.m2", "coupling.max_step": "s"}
+#: the FMU adapter's parameters of the coupling (names)
+FMU_PARAMETERS = ("coupling.motor_inertia", "input_shaft.include_drive_inertia")
+
+__all__ = ["INPUTS", "FMU_UNITS", "FMU_PARAMETERS", "CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
+           "JACOBI_CONSTANT", "GAUSS_SEIDEL_CONSTANT"]
+
+#: h_max * omega_c at which the explicit Jacobi coupling of a motor rotor J (fed the held
+#: input_shaft.torque) and this drive (fed the held rotor angle and speed) loses stability:
+#: the spectral radius of the linear two-inertia map (rotor J, spring k_r with damping c_r,
+#: driver I; the drive's step integrated exactly with the angle advancing at the held speed)
+#: crosses 1 at h omega_c = 0.41 (J = 0.001 kg m2), 0.42 (0.003), 0.64 (0.01), 1.25 (0.03) for
+#: the default k_r, c_r and driver inertia; 0.4 is the smallest (docs/fmu.md, "Angle causality:
+#: the stable step", with measured limits)
+JACOBI_CONSTANT = 0.4
+#: the same for Gauss-Seidel, the drive stepped first and the rotor fed its new torque:
+#: 1.47 (J = 0.001), 1.77 (0.003), 2.42 (0.01); 1.4 is the smallest
+GAUSS_SEIDEL_CONSTANT = 1.4
+
+
+def coupling_frequency(motor_inertia: float, driver_inertia: float, stiffness: float) -> float:
+    """omega_c = sqrt(k_r (1/J_motor + 1/I_driver)) [rad/s]: the input-shaft spring between the
+    motor's rotor and the driver sprocket, the fastest mode an angle-causality coupling sees."""
+    for name, value in (("motor inertia", motor_inertia), ("driver.inertia", driver_inertia),
+                        ("input_shaft.stiffness", stiffness)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be positive and finite, got {value!r}")
+    return math.sqrt(stiffness * (1.0 / motor_inertia + 1.0 / driver_inertia))
+
+
+def stable_step(motor_inertia: float, params: Mapping, scheme: str = "jacobi") -> float:
+    """Largest communication step [s] an explicit coupling of a motor rotor of inertia
+    ``motor_inertia`` [kg m2] to this drive holds in angle causality: C / omega_c with
+    C = :data:`JACOBI_CONSTANT` or :data:`GAUSS_SEIDEL_CONSTANT`. With ``input_shaft.rigid``
+    there is no spring: inf (the limit is then the feedthrough, :func:`rigid_inertia_limit`)."""
+    if scheme not in ("jacobi", "gauss-seidel"):
+        raise ValueError(f"scheme must be 'jacobi' or 'gauss-seidel', got {scheme!r}")
+    if params["fidelity"] == 0 or params["input_shaft.rigid"]:
+        return math.inf
+    c = JACOBI_CONSTANT if scheme == "jacobi" else GAUSS_SEIDEL_CONSTANT
+    return c / coupling_frequency(motor_inertia, params["driver.inertia"],
+                                  params["input_shaft.stiffness"])
+
+
+class CouplingUnstable(SimulationDiverged):
+    """The master's coupling of this drive to the rest of the system is unstable."""
+
+
+class CouplingWatch:
+    """Recognises an unstable explicit coupling in the inputs a master sets.
+
+    The increments of an input from one communication point to the next (input-shaft speed,
+    load torque) are cut into half-cycles (runs of one sign), each with its peak |increment|.
+    A coupling that goes unstable shows as an oscillation of a few steps per period whose
+    amplitude grows: the last :data:`CYCLES` full cycles (pairs of half-cycles, each at most
+    :data:`MAX_HALF_CYCLE` steps long) have strictly growing peak-to-peak increments, the last
+    :data:`GROWTH` times the first and above ``floor * (1 + |input|)`` (far above round-off).
+    A physical transient decays and the drive's own modes are integrated inside the FMU; the
+    motor's controller is far slower than a few communication steps."""
+
+    CYCLES = 4
+    MAX_HALF_CYCLE = 8
+    GROWTH = 1.5
+    PEAKS = 2 * CYCLES
+
+    def __init__(self, names=("input_shaft.speed", "load.torque"), floors=(1e-4, 1e-4)):
+        self.names, self.floors = tuple(names), tuple(floors)
+        self.reset()
+
+    def reset(self) -> None:
+        self._last = [None] * len(self.names)      # last value of each input
+        self._sign = [0] * len(self.names)         # sign of the current half-cycle
+        self._run = [0] * len(self.names)          # its length in steps
+        self._peak = [0.0] * len(self.names)       # its peak |increment|
+        self._peaks = [deque(maxlen=self.PEAKS) for _ in self.names]   # finished half-cycles
+
+    def state(self) -> dict:
+        return {"last": list(self._last), "sign": list(self._sign), "run": list(self._run),
+                "peak": list(self._peak), "peaks": [list(p) for p in self._peaks]}
+
+    def restore(self, s: Mapping) -> None:
+        self._last, self._sign = list(s["last"]), list(s["sign"])
+        self._run, self._peak = list(s["run"]), list(s["peak"])
+        self._peaks = [deque(p, maxlen=self.PEAKS) for p in s["peaks"]]
+
+    def update(self, values) -> str | None:
+        """Take the inputs at the next communication point; return the name of the input that
+        grows and alternates (the coupling is unstable), else None."""
+        found = None
+        for i, value in enumerate(values):
+            last, self._last[i] = self._last[i], value
+            if last is None or not math.isfinite(value):
+                continue
+            d = float(value) - float(last)
+            sign = (d > 0) - (d < 0)
+            if sign == 0:
+                continue
+            if sign != self._sign[i]:
+                if self._sign[i]:
+                    # a finished half-cycle counts only when it was short
+                    if self._run[i] <= self.MAX_HALF_CYCLE:
+                        self._peaks[i].append(self._peak[i])
+                    else:
+                        self._peaks[i].clear()
+                self._sign[i], self._run[i], self._peak[i] = sign, 0, 0.0
+            self._run[i] += 1
+            self._peak[i] = max(self._peak[i], abs(d))
+            if found is None and self._growing(i):
+                found = self.names[i]
+        return found
+
+    def _growing(self, i) -> bool:
+        peaks = list(self._peaks[i])
+        if len(peaks) < self.PEAKS:
+            return False
+        cycles = [peaks[k] + peaks[k + 1] for k in range(0, self.PEAKS, 2)]
+        scale = self.floors[i] * (1.0 + abs(self._last[i]))
+        return (all(b > a for a, b in zip(cycles, cycles[1:]))
+                and cycles[-1] >= self.GROWTH * cycles[0] and cycles[-1] > scale)
+
+    def suspect(self) -> str | None:
+        """The input whose last three half-cycles (the current one included) were short and
+        grew: not proof, but what to blame when a step fails outright before :meth:`update`
+        could see whole cycles (a coupling far past its stable step)."""
+        for i, name in enumerate(self.names):
+            peaks = list(self._peaks[i])[-2:] + [self._peak[i]]
+            if (len(peaks) == 3 and self._run[i] <= self.MAX_HALF_CYCLE
+                    and peaks[0] < peaks[1] < peaks[2]
+                    and peaks[2] > 10 * self.floors[i] * (1.0 + abs(self._last[i]))):
+                return name
+        return None
+
+    def recent(self, i: int = 0) -> list[float]:
+        """Peak-to-peak increments of the last full cycles of input ``i`` (as compared)."""
+        peaks = list(self._peaks[i])[-self.PEAKS:]
+        return [peaks[k] + peaks[k + 1] for k in range(0, len(peaks) - 1, 2)]
+
+
+@dataclass
+class Built:
+    """What :meth:`CosimSession.build` made."""
+    stepper: object
+    params: dict
+    drive: object
+    level: int
+
+
+class CosimSession:
+    """A ChainDrive co-simulation slave without FMI (module docstring).
+
+    ``lib``: the chainmodel package to use (the FMU passes its private copy); default this
+    package. Inputs: :meth:`set_inputs`; parameters: :meth:`build`; a step: :meth:`step`;
+    outputs at the current point for the inputs set: :meth:`outputs`."""
+
+    def __init__(self, lib=None, name: str = "ChainDrive"):
+        if lib is None:
+            from . import integrate, models, scene
+            lib = {"models": models, "integrate": integrate, "scene": scene}
+        self._M, self._I, self._S = lib["models"], lib["integrate"], lib["scene"]
+        self.name = name
+        self.stepper = None
+        self.params: dict | None = None
+        self.drive = None
+        self.angle = self.speed = self.torque = 0.0
+        self.motor_torque = 0.0               # input motor.torque (torque causality only)
+        self.prev_t: float | None = None     # previous communication point and its speed input
+        self.prev_speed = 0.0
+        self.motor_inertia = 0.0              # a motor rotor's inertia, for the coupling message
+        #: False: input_shaft.torque leaves out the drive's inertia torque (the part linear in the
+        #: input's acceleration; level 0 and input_shaft.rigid), the motor model carries it
+        self.include_drive_inertia = True
+        self.watch = CouplingWatch()
+
+    # --- inputs --------------------------------------------------------------------------------
+    def set_inputs(self, angle: float, speed: float, torque: float,
+                   motor_torque: float = 0.0) -> None:
+        self.angle, self.speed, self.torque = angle, speed, torque
+        self.motor_torque = motor_torque
+
+    @property
+    def torque_causal(self) -> bool:
+        """input_shaft.causality = torque: motor.torque drives a rotor the model integrates
+        (chainmodel.models.torque_causality); the angle and speed inputs are not read."""
+        return self.stepper is not None and hasattr(self.stepper.model, "motor_outputs")
+
+    def motor_values(self, fresh: bool = False) -> tuple[float, float]:
+        """motor.angle, motor.speed: the rotor's state in torque causality; in angle causality
+        the input shaft's angle and speed (``fresh``: as just set, else as held to the end of
+        the last step)."""
+        st = self.stepper
+        if st is not None and self.torque_causal:
+            return tuple(float(v) for v in st.model.motor_outputs(st.x))
+        if st is not None and not fresh:
+            return st.inputs.angle, st.inputs.speed
+        return self.angle, self.speed
+
+    def acceleration(self, t: float) -> float:
+        """Backward difference of the speed input between communication points,
+        a_k = (w_k - w_(k-1)) / (t_k - t_(k-1)); 0 at the first point (no history)."""
+        if self.prev_t is not None and t > self.prev_t:
+            return (self.speed - self.prev_speed) / (t - self.prev_t)
+        return 0.0
+
+    def inputs(self, t: float) -> Inputs:
+        return Inputs(self.angle, self.speed, self.torque, self.acceleration(t))
+
+    # --- model ---------------------------------------------------------------------------------
+    def build(self, params: dict, t: float, state=None, model=None) -> Built:
+        """Model and stepper for validated ``params`` at time ``t`` (from ``state``, a
+        StepperState, when given; ``model``: one already built from ``params``). Raises
+        ValueError for a level this package lacks."""
+        level = params["fidelity"]
+        classes = self._M.MODEL_CLASSES
+        if level not in classes:
+            from .parameters import FIDELITY_NAMES
+            raise ValueError(
+                f"parameter fidelity = {level} ({FIDELITY_NAMES[level]}) is not available in "
+                "this build of the FMU; available: "
+                + ", ".join(f"{k} ({FIDELITY_NAMES[k]})" for k in sorted(classes)))
+        if model is None:    # build_model: the level's class, wrapped for torque causality
+            model = self._M.build_model(level, self._S.drive_from_parameters(params, self.name),
+                                        params)
+        drive = model.drive
+        x0 = None if state is None else state.x
+        stepper = self._I.make_stepper(model, params["solver.method"], t, self.inputs(t),
+                                       step=params["solver.step"], rtol=params["solver.rtol"],
+                                       tolerance=params["solver.tolerance"], x0=x0)
+        if state is not None:
+            stepper.set_state(state)
+        else:
+            self.watch.reset()
+        self.stepper, self.params, self.drive = stepper, params, drive
+        return Built(stepper, params, drive, level)
+
+    @property
+    def t(self) -> float:
+        return self.stepper.t
+
+    # --- steps and outputs -----------------------------------------------------------------
+    def outputs(self) -> np.ndarray:
+        """Every output (ALL_OUTPUTS order) at the current state for the inputs set (direct
+        feedthrough); a buffer the next call reuses. Refused inputs raise ValueError."""
+        st = self.stepper
+        row = st.outputs_held(self.angle, self.speed, self.acceleration(st.t), self.torque)
+        if self.include_drive_inertia:
+            return row
+        return self._without_drive_inertia(row, self.angle, self.speed, self.torque)
+
+    def _without_drive_inertia(self, row: np.ndarray, angle, speed, torque) -> np.ndarray:
+        """``row`` (a copy) with input_shaft.torque of the same state and inputs but zero input
+        acceleration: the drive's inertia torque I_eff(angle) a, and with it the feedthrough
+        I_eff / h of the speed input through the backward difference, left to the motor model.
+        At levels 1-3 with the shaft spring the acceleration does not enter that torque."""
+        from .models.outputs import O_INPUT_SHAFT_TORQUE
+        row = row.copy()
+        row[O_INPUT_SHAFT_TORQUE] = self.stepper.outputs_held(angle, speed, 0.0, torque)[
+            O_INPUT_SHAFT_TORQUE]
+        return row
+
+    def step(self, t: float, h: float, t_end: float | None = None) -> np.ndarray:
+        """Advance from ``t`` (the current time) to ``t + h`` (or exactly to ``t_end``, a grid
+        point of the master's) with the inputs held first-order;
+        return every output there. Raises :class:`CouplingUnstable` (nothing done) when the
+        inputs show an unstable coupling, SimulationDiverged or ValueError when the step fails;
+        a failed step leaves the session at ``t``."""
+        st = self.stepper
+        # the watch takes the inputs of this point even when the step then fails: a master
+        # retrying the point with the same inputs adds a zero increment, which it skips
+        growing = self.watch.update((self.speed, self.torque))
+        if growing is not None:
+            raise CouplingUnstable(self.coupling_message(t, h, growing))
+        t_to = t + h if t_end is None else t_end
+        try:
+            if self.torque_causal:
+                out = st.advance(t_to, Inputs(0.0, 0.0, self.torque, 0.0, self.motor_torque))
+                row = np.array([out[o.name] for o in self._M.ALL_OUTPUTS])
+            else:
+                row = st.advance_held(t_to, self.angle, self.speed, self.acceleration(t),
+                                      self.torque)
+        except (SimulationDiverged, ValueError) as exc:
+            suspect = self.watch.suspect()
+            if suspect is not None:   # the failure is the coupling's: its advice is not ours
+                what = str(exc).split(";")[0]
+                raise CouplingUnstable(self.coupling_message(t, h, suspect)
+                                       + f" (The step itself failed: {what}.)") from exc
+            raise
+        self.prev_t, self.prev_speed = t, self.speed
+        if not self.include_drive_inertia:
+            u = st.inputs      # the held inputs at t + h
+            row = self._without_drive_inertia(row, u.angle, u.speed, u.torque)
+        return row
+
+    def coupling_message(self, t: float, h: float, name: str) -> str:
+        """The sentence for an unstable coupling: which input, what holds instead."""
+        p = self.params
+        i = self.watch.names.index(name)
+        peaks = ", ".join(f"{v:.3g}" for v in self.watch.recent(i))
+        unit = "rad/s" if name == "input_shaft.speed" else "N.m"
+        text = (f"co-simulation coupling unstable at t = {t:.9g} s: the input {name} set by "
+                f"the master oscillates with growing amplitude from step to step (peak-to-peak "
+                f"change per step over its last cycles: {peaks} {unit}) - the master's explicit "
+                f"coupling at a communication step of {h:.3g} s is unstable, not the chain "
+                "drive or its speed limits. ")
+        if name == "input_shaft.speed" and not (p["fidelity"] == 0 or p["input_shaft.rigid"]):
+            text += (f"A motor rotor of inertia J on the input-shaft spring (k_r = "
+                     f"{p['input_shaft.stiffness']:g} N.m/rad, driver {p['driver.inertia']:g} "
+                     f"kg.m2) holds at steps up to h = {JACOBI_CONSTANT:g} / omega_c, omega_c = "
+                     "sqrt(k_r (1/J + 1/I_driver)) (Jacobi; Gauss-Seidel "
+                     f"{GAUSS_SEIDEL_CONSTANT:g} / omega_c): ")
+            js = [self.motor_inertia] if self.motor_inertia > 0 else [0.001, 0.01, 0.1]
+            text += ", ".join(f"{stable_step(j, p):.3g} s for J = {j:g} kg.m2" for j in js)
+            text += "; use such a step or torque causality (the motor's torque in, the rotor "
+            text += "integrated inside this FMU). "
+        elif name == "input_shaft.speed":
+            text += ("Here the input-shaft torque contains the drive's inertia times the "
+                     "backward-difference acceleration of the speed input, a feedthrough of "
+                     "I_eff / h: a motor model holds only when its own rotor inertia exceeds the "
+                     "drive's reflected inertia; use a smaller step, a larger rotor inertia or "
+                     "torque causality. ")
+        else:
+            text += ("The load model's torque depends on this drive's outputs: use a smaller "
+                     "communication step or let the load model integrate the driven inertia. ")
+        return text + f"Step discarded; the FMU stays at t = {t:.9g} s."
+
+    # --- state ---------------------------------------------------------------------------------
+    def get_state(self) -> dict:
+        """JSON-serialisable state (exact float round trip)."""
+        s = None
+        if self.stepper is not None:
+            ss = self.stepper.get_state()
+            u = ss.inputs
+            s = {"t": ss.t, "x": [float(v) for v in ss.x], "h": ss.h,
+                 "inputs": [u.angle, u.speed, u.torque, u.acceleration, u.motor_torque],
+                 "extra": dict(ss.extra)}
+        return {"stepper": s, "prev_t": self.prev_t, "prev_speed": self.prev_speed,
+                "watch": self.watch.state()}
+
+    def stepper_state(self, s: Mapping):
+        """A StepperState from :meth:`get_state`'s ``"stepper"`` entry."""
+        return self._I.StepperState(s["t"], np.array(s["x"], float), s["h"],
+                                    self._M.Inputs(*s["inputs"]), dict(s["extra"]))
+
+    def restore(self, state: Mapping, params: dict | None) -> None:
+        """Restore :meth:`get_state`'s result; ``params``: the validated parameters to rebuild
+        with when they differ from the current model's (None: keep the model)."""
+        self.prev_t, self.prev_speed = state["prev_t"], state["prev_speed"]
+        if "watch" in state:
+            self.watch.restore(state["watch"])
+        s = state["stepper"]
+        if s is None:
+            self.stepper = None
+            return
+        saved = self.stepper_state(s)
+        if self.stepper is None or (params is not None and params != self.params):
+            watch = self.watch.state()
+            self.build(params if params is not None else self.params, saved.t, saved)
+            self.watch.restore(watch)
+        else:
+            self.stepper.set_state(saved)

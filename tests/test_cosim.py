@@ -1,0 +1,239 @@
+"""chainmodel.cosim: the co-simulation session the FMU adapter maps FMI onto, the coupling
+watch (issue 18 item 4) and the stable communication step of angle causality (item 3)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from chainmodel import parameters as P
+from chainmodel.cosim import (GAUSS_SEIDEL_CONSTANT, JACOBI_CONSTANT, CosimSession,
+                              CouplingUnstable, CouplingWatch, coupling_frequency, stable_step)
+from chainmodel.integrate import make_stepper
+from chainmodel.models import MODEL_CLASSES, Inputs
+from chainmodel.scene import drive_from_parameters
+
+
+def _inputs(k, h):
+    """A ramp to 120 rpm over 0.05 s, constant load: the inputs at point k."""
+    w_end, ramp = 4 * math.pi, 0.05
+    t = k * h
+    speed = w_end * min(t / ramp, 1.0)
+    angle = 0.5 * w_end * t * t / ramp if t <= ramp else w_end * (t - 0.5 * ramp)
+    return angle, speed, 20.0
+
+
+@pytest.mark.parametrize("level", [0, 1])
+def test_session_steps_as_the_stepper_with_backward_difference_acceleration(level):
+    """The session's steps are the stepper's advance_held with the inputs held and the
+    acceleration a_k = (w_k - w_(k-1)) / (t_k - t_(k-1)) computed here: bit-identical rows."""
+    params = P.validate({"fidelity": level})
+    h, n = 1e-4, 30
+    session = CosimSession()
+    session.set_inputs(*_inputs(0, h))
+    session.build(params, 0.0)
+    model = MODEL_CLASSES[level](drive_from_parameters(params, "ChainDrive"), params)
+    a0, w0, T0 = _inputs(0, h)
+    st = make_stepper(model, params["solver.method"], 0.0, Inputs(a0, w0, T0, 0.0),
+                      step=params["solver.step"], rtol=params["solver.rtol"],
+                      tolerance=params["solver.tolerance"])
+    prev_w = None
+    for k in range(n):
+        angle, speed, torque = _inputs(k, h)
+        acc = 0.0 if prev_w is None else (speed - prev_w) / (k * h - (k - 1) * h)
+        session.set_inputs(angle, speed, torque)
+        got = session.step(k * h, h).copy()
+        want = st.advance_held(k * h + h, angle, speed, acc, torque).copy()   # as fmi2DoStep
+        np.testing.assert_array_equal(got, want)
+        prev_w = speed
+
+
+def test_session_state_round_trip_repeats_a_step_exactly():
+    params = P.validate({"fidelity": 1})
+    h = 1e-4
+    session = CosimSession()
+    session.set_inputs(*_inputs(0, h))
+    session.build(params, 0.0)
+    for k in range(5):
+        session.set_inputs(*_inputs(k, h))
+        session.step(k * h, h)
+    saved = session.get_state()
+    session.set_inputs(*_inputs(5, h))
+    first = session.step(5 * h, h).copy()
+    session.step(6 * h, h)
+    session.restore(saved, None)
+    session.set_inputs(*_inputs(5, h))
+    np.testing.assert_array_equal(session.step(5 * h, h), first)
+
+
+# --- the coupling watch ---------------------------------------------------------------------
+
+def _feed(watch, values):
+    """Index of the first point at which the watch reports, or None."""
+    for k, v in enumerate(values):
+        if watch.update((v, 10.0)) is not None:
+            return k
+    return None
+
+
+def test_watch_reports_a_growing_oscillation_of_a_few_steps_per_period():
+    # what an unstable explicit coupling looks like: eigenvalue 1.1 exp(+-1.0 i) per step
+    k = np.arange(200)
+    speed = 12.0 + 1e-3 * np.cumsum(1.1 ** k * np.cos(1.0 * k))
+    at = _feed(CouplingWatch(), speed)
+    assert at is not None
+    # reported while the oscillation is still small: well before the amplitude reaches 1 rad/s
+    assert 1e-3 * 1.1 ** at < 1.0
+
+
+def test_watch_reports_the_level_0_feedthrough_alternation():
+    # level 0: dw_k = -(I_eff / J) dw_(k-1), I_eff / J = 2 (a too-light rotor)
+    d = 1e-3 * (-2.0) ** np.arange(20)
+    assert _feed(CouplingWatch(), 5.0 + np.cumsum(d)) is not None
+
+
+@pytest.mark.parametrize("case", ["decaying", "slow controller", "ramp", "constant"])
+def test_watch_keeps_quiet_on_stable_inputs(case):
+    k = np.arange(3000)
+    if case == "decaying":       # a stable coupling's transient: eigenvalue 0.97 exp(+-1 i)
+        speed = 12.0 + np.cumsum(0.5 * 0.97 ** k * np.cos(k))
+    elif case == "slow controller":   # a growing but slow (200 steps per period) oscillation
+        speed = 12.0 + 0.1 * 1.002 ** k * np.sin(2 * np.pi * k / 200)
+    elif case == "ramp":
+        speed = np.minimum(k * 0.025, 12.566)
+    else:
+        speed = np.full(len(k), 12.566)
+    assert _feed(CouplingWatch(), speed) is None
+
+
+# --- the stable step of angle causality -------------------------------------------------------
+
+def test_coupling_frequency_is_the_two_inertia_spring_mode():
+    k, J, I = 12000.0, 0.01, 4.0108e-3
+    w = coupling_frequency(J, I, k)
+    # the spring between two free inertias: omega^2 = k (J + I) / (J I)
+    assert w == pytest.approx(math.sqrt(k * (J + I) / (J * I)), rel=1e-14)
+    with pytest.raises(ValueError, match="motor inertia"):
+        coupling_frequency(0.0, I, k)
+
+
+def test_stable_step_is_infinite_without_the_spring_and_refuses_bad_schemes():
+    assert stable_step(0.01, P.validate({"fidelity": 0})) == math.inf
+    assert stable_step(0.01, P.validate({"fidelity": 1, "input_shaft.rigid": True})) == math.inf
+    with pytest.raises(ValueError, match="scheme"):
+        stable_step(0.01, P.validate({"fidelity": 1}), "implicit")
+
+
+def _jacobi_map(h, J, I, k, c, scheme):
+    """The linear map of one communication step of a rotor J (fed the held spring torque,
+    integrated exactly at constant torque) and the driver I on the spring k, c to an anchor that
+    starts at the rotor's angle and advances at its held speed (integrated exactly). State:
+    rotor angle and speed, driver angle and speed, anchor angle and speed at the end of the
+    drive's last step (the torque the master reads is computed from those)."""
+    A = np.array([[0, 1, 0, 0], [-k / I, -c / I, k / I, c / I], [0, 0, 0, 1], [0, 0, 0, 0.]])
+    E = expm(A * h)
+    drive = np.zeros((4, 6))
+    drive[:, [2, 3, 0, 1]] = E          # [driver, anchor] after the step from [driver, rotor]
+    torque_now = np.array([0, 0, -k, -c, k, c], float)
+    torque_new = k * (drive[2] - drive[0]) + c * (drive[3] - drive[1])
+    T = torque_now if scheme == "jacobi" else torque_new
+    M = np.zeros((6, 6))
+    M[0] = np.eye(6)[0] + h * np.eye(6)[1] - h * h / (2 * J) * T
+    M[1] = np.eye(6)[1] - h / J * T
+    M[2:] = drive
+    ev = np.linalg.eigvals(M)
+    return max(abs(ev[abs(ev - 1) > 1e-6]))   # the rigid-body motion (eigenvalue 1) is neutral
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", "gauss-seidel"])
+@pytest.mark.parametrize("J", [0.001, 0.003, 0.01])
+def test_the_stable_step_holds_and_twice_it_does_not(scheme, J):
+    """C / omega_c is inside the stable region of the linear coupling for the default shaft and
+    driver, and twice it is outside (so the constant is not needlessly small)."""
+    params = P.validate({"fidelity": 1})
+    k, c, I = params["input_shaft.stiffness"], params["input_shaft.damping"], \
+        params["driver.inertia"]
+    h = stable_step(J, params, scheme)
+    assert _jacobi_map(h, J, I, k, c, scheme) < 1.0
+    assert _jacobi_map(2 * h, J, I, k, c, scheme) > 1.0
+    assert h * coupling_frequency(J, I, k) == pytest.approx(
+        JACOBI_CONSTANT if scheme == "jacobi" else GAUSS_SEIDEL_CONSTANT)
+
+
+def test_session_refuses_a_step_when_the_speed_input_oscillates_and_grows():
+    params = P.validate({"fidelity": 1})
+    session = CosimSession()
+    session.motor_inertia = 0.01
+    session.set_inputs(0.0, 0.0, 0.0)
+    session.build(params, 0.0)
+    h, angle = 5e-4, 0.0
+    speeds = 1e-2 * np.cumsum(1.2 ** np.arange(60) * np.cos(1.0 * np.arange(60)))
+    with pytest.raises(CouplingUnstable) as err:
+        for k, w in enumerate(speeds):
+            session.set_inputs(angle, float(w), 0.0)
+            session.step(k * h, h)
+            angle += h * w
+    text = str(err.value)
+    assert "coupling unstable" in text and "input_shaft.speed" in text
+    assert f"{stable_step(0.01, params):.3g} s for J = 0.01 kg.m2" in text
+    assert "torque causality" in text and "Step discarded" in text
+    t_failed = session.t
+    session.set_inputs(angle, 0.0, 0.0)   # the session stayed at the last point
+    assert session.t == t_failed
+
+
+@pytest.mark.parametrize("level,rigid", [(0, False), (1, True), (1, False)])
+def test_without_drive_inertia_the_torque_ignores_the_acceleration_estimate(level, rigid):
+    """input_shaft.include_drive_inertia = false: input_shaft.torque is the same whatever the
+    backward-difference acceleration (here changed through the speed at the last point), every other
+    output unchanged; with it, the torque changes linearly in that acceleration (level 0 and the
+    rigid shaft; at level 1 with the spring it does not enter the torque at all)."""
+    from chainmodel.models.outputs import O_INPUT_SHAFT_TORQUE
+    params = P.validate({"fidelity": level, "input_shaft.rigid": rigid})
+    rows = {}
+    for include in (True, False):
+        s = CosimSession()
+        s.include_drive_inertia = include
+        s.set_inputs(0.1, 1.0, 10.0)
+        s.build(params, 0.0)
+        s.step(0.0, 1e-3)
+        s.set_inputs(0.1 + 1e-3, 1.0, 10.0)
+        for prev in (0.9, 0.95, 1.0):   # the speed at the last point: only the estimate moves
+            s.prev_speed = prev
+            rows[include, prev] = s.outputs().copy()
+    T = O_INPUT_SHAFT_TORQUE
+    others = [k for k in range(len(rows[True, 1.0])) if k != T]
+    for prev in (0.9, 0.95):
+        assert rows[False, prev][T] == rows[False, 1.0][T]
+        np.testing.assert_array_equal(rows[False, prev][others], rows[True, prev][others])
+    # acceleration estimates 100, 50, 0 rad/s2: equal steps of the torque with the inertia
+    d1 = rows[True, 0.9][T] - rows[True, 0.95][T]
+    d2 = rows[True, 0.95][T] - rows[True, 1.0][T]
+    if level == 0 or rigid:
+        assert d1 > 0 and d1 == pytest.approx(d2, rel=1e-6)
+        assert rows[False, 1.0][T] == pytest.approx(rows[True, 1.0][T], rel=1e-12)  # a = 0
+    else:
+        assert d1 == 0 and d2 == 0
+
+
+def test_a_step_failing_during_a_fast_growing_oscillation_blames_the_coupling():
+    """Far past the stable step the speed input alternates and grows so fast (6 times a step)
+    that level 1's speed limit (236 rad/s) refuses a step before four whole cycles are seen:
+    the message is the coupling's, quoting the refusal without its advice."""
+    params = P.validate({"fidelity": 1})
+    session = CosimSession()
+    session.set_inputs(0.0, 1.0, 0.0)
+    session.build(params, 0.0)
+    h, angle, speed = 1e-3, 0.0, 1.0
+    with pytest.raises(CouplingUnstable) as err:
+        for k in range(12):
+            session.set_inputs(angle, speed, 0.0)
+            session.step(k * h, h)
+            angle += h * speed
+            speed += 0.01 * (-6.0) ** k
+    text = str(err.value)
+    assert "coupling unstable" in text and "The step itself failed" in text
+    assert "lower speed" not in text and "fidelity 3" not in text
