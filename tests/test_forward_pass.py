@@ -70,6 +70,13 @@ def test_auto_builds_each_scene_model_and_the_drive_once(counts, monkeypatch):
             return _original(level)
 
         monkeypatch.setattr(module, "model_class", model_class)
+    original_build = S.build_model       # Scene.model() builds through models.build_model
+
+    def build_model(level, *args, _original=original_build):
+        built[level] += 1
+        return _original(level, *args)
+
+    monkeypatch.setattr(S, "build_model", build_model)
     r, drives = _drives_built(lambda: chainmodel.simulate("xu2010", fidelity="auto", **RUN))
     choice = r.auto_choice
     # the overrides given, the scene at level 0 (the features the trade table is searched by),
