@@ -30,10 +30,10 @@ import math
 
 import numpy as np
 
-from .._numba import ENABLED, jit
+from .._numba import ENABLED, jit, jit_noalloc
 from .span_roles import lower_tight
 
-__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
+__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "jit_noalloc", "G_SIZE"]
 
 _EDGE = 1e-9          # as chainmodel.kinematics.wrapping._EDGE: an endpoint at an event is past it
 _HALF_PI = 0.5 * math.pi
@@ -63,7 +63,7 @@ def geometry_constants(drive) -> np.ndarray:
     return np.concatenate([head] + tables)
 
 
-@jit
+@jit_noalloc
 def _seat(cx, cy, r, cph, sph, G, table, n, j):
     """Position of seat j (cos and sin of its angle phase + 2 pi j / n too) of a sprocket at
     (cx, cy) with pitch radius r, cph and sph the cosine and sine of its phase; ``table`` the
@@ -74,7 +74,7 @@ def _seat(cx, cy, r, cph, sph, G, table, n, j):
     return cx + r * c, cy + r * s, c, s
 
 
-@jit
+@jit_noalloc
 def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, spt, tt, nt, dir0,
           G):
     """One straight span between two sprockets (scalar form of wrapping._span).
@@ -126,7 +126,7 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
             ut, phf + 2.0 * af * jf, pht + 2.0 * at * jt, d)
 
 
-@jit
+@jit_noalloc
 def span_geometry(phi1, phi2, G):
     """Both spans for one pair of rotations (scalar form of wrapping.chain_geometry).
 
@@ -190,19 +190,19 @@ P_SIZE = 27
 A_SIZE = 20
 
 
-@jit
+@jit_noalloc
 def _galerkin_g(k):
     """G_m of seed 004 eq 59: 2 int_0^1 sin(m pi x) dx."""
     return 2.0 * (1.0 - (-1.0) ** k) / (k * math.pi)
 
 
-@jit
+@jit_noalloc
 def _galerkin_e(k):
     """E_m of seed 004 eq 59: 2 int_0^1 x sin(m pi x) dx."""
     return -2.0 * (-1.0) ** k / (k * math.pi)
 
 
-@jit
+@jit_noalloc
 def _coriolis(k, j):
     """Gyroscopic Galerkin coefficient of 2 s w_xt on sin modes: 2 int_0^1 sin(k pi x)
     j pi cos(j pi x) dx * 2 / 2 = 2 k j (1 - (-1)^(k+j)) / (k^2 - j^2), zero for k = j.
@@ -213,7 +213,7 @@ def _coriolis(k, j):
     return 2.0 * k * j * (1.0 - (-1.0) ** (k + j)) / (k * k - j * j)
 
 
-@jit
+@jit_noalloc
 def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
              seat_slack, length_rate, links_compliance):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
@@ -232,7 +232,7 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link,
     return 0.0, switch
 
 
-@jit
+@jit_noalloc
 def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2.
 
