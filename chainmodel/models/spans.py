@@ -75,6 +75,21 @@ def _seat(cx, cy, r, cph, sph, G, table, n, j):
 
 
 @jit_noalloc
+def _mod_two_pi(v):
+    """``v % (2 pi)`` (Python's float modulo), bitwise, without a call to fmod for the values
+    _span meets (-2 pi < v < 4 pi): there fmod is exact and equals v, v - 2 pi (exact by
+    Sterbenz's lemma) or v (then + 2 pi, rounded as Python rounds it). fmod was a tenth of the
+    level-1 stepping time (docs/performance.md, issue 20 third pass)."""
+    if 0.0 <= v < _TWO_PI:
+        return v + 0.0              # -0.0 % w is +0.0
+    if _TWO_PI <= v < 2.0 * _TWO_PI:
+        return v - _TWO_PI
+    if -_TWO_PI < v < 0.0:
+        return v + _TWO_PI
+    return v % _TWO_PI
+
+
+@jit_noalloc
 def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, spt, tt, nt, dir0,
           G):
     """One straight span between two sprockets (scalar form of wrapping._span).
@@ -101,7 +116,7 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
         jf2 = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
         jt2 = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
         if jf2 == jf and jt2 == jt:
@@ -113,7 +128,7 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
     dx = bx - ax
     dy = by - ay
     length = math.hypot(dx, dy)
