@@ -822,19 +822,23 @@ def _advance_held_loops(method, x_in, x_out, t0, t1, a0, w0, accel, ld, P, OM, c
 
 
 if HAVE_NUMBA:  # pragma: no branch
-    # numba resolves the loop's callees by their global names at compile time
-    _GEOM = njit(_geometry_loops)
-    _FORCES = njit(_forces_loops)
-    _ACCEL = njit(_accel_loops)
-    _HERMITE = njit(_hermite)
-    _run_fixed_jit = njit(_run_fixed_loops)
-    _ENGAGED = njit(_engaged_loops)
-    _SPANS = njit(_spans_loops)
-    _outputs_jit = njit(_outputs_loops)
+    # numba resolves the loop's callees by their global names at compile time. Every kernel
+    # but _HELD allocates no array and returns none: compiled without reference counting
+    # (_nrt=False, as chainmodel._numba.jit_noalloc; its callers hold the arrays), which only
+    # removes the atomic increments and decrements of the arrays passed down (no arithmetic
+    # change)
+    _GEOM = njit(_geometry_loops, _nrt=False)
+    _FORCES = njit(_forces_loops, _nrt=False)
+    _ACCEL = njit(_accel_loops, _nrt=False)
+    _HERMITE = njit(_hermite, _nrt=False)
+    _run_fixed_jit = njit(_run_fixed_loops, _nrt=False)
+    _ENGAGED = njit(_engaged_loops, _nrt=False)
+    _SPANS = njit(_spans_loops, _nrt=False)
+    _outputs_jit = njit(_outputs_loops, _nrt=False)
     _RUN = _run_fixed_jit
     _OUT = _outputs_jit
-    _OMEGA = njit(_omega_loops)
-    _POINTS = njit(_advance_points_loops)
+    _OMEGA = njit(_omega_loops, _nrt=False)
+    _POINTS = njit(_advance_points_loops, _nrt=False)
     _HELD = njit(_advance_held_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
     _GEOM, _FORCES = _geometry_loops, _forces_loops
