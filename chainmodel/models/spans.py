@@ -68,7 +68,12 @@ def _seat(cx, cy, r, cph, sph, G, table, n, j):
     """Position of seat j (cos and sin of its angle phase + 2 pi j / n too) of a sprocket at
     (cx, cy) with pitch radius r, cph and sph the cosine and sine of its phase; ``table`` the
     offset of its cos/sin table in G."""
-    k = int(j) % n
+    k = int(j)
+    # k % n without an integer division for the seats a span meets (-n <= k < 2n)
+    if k >= n:
+        k = k - n if k < 2 * n else k % n
+    elif k < 0:
+        k = k + n if k >= -n else k % n
     c = cph * G[table + k] - sph * G[table + n + k]
     s = sph * G[table + k] + cph * G[table + n + k]
     return cx + r * c, cy + r * s, c, s
