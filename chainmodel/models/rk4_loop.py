@@ -50,7 +50,7 @@ from .outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENS
                       O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
-                    P_RHOA, P_RIGID, evaluate, jit, jit_noalloc)
+                    P_RHOA, P_RIGID, evaluate, evaluate_rate, jit, jit_noalloc)
 from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
@@ -116,8 +116,11 @@ def _inputs(t, c):
 
 @jit_noalloc
 def _rhs_at(t, x, c, G, P, dx, aux):
+    """The derivative at (t, x) into ``dx``; aux is left partly stale (spans.evaluate_rate):
+    in this loop every reader of aux (outputs, frequency, switching functions) follows a
+    :func:`_switch`, the full evaluation."""
     th, w, acc, load = _inputs(t, c)
-    evaluate(x, th, w, acc, load, G, P, dx, aux)
+    evaluate_rate(x, th, w, acc, load, G, P, dx, aux)
 
 
 @jit_noalloc
@@ -165,7 +168,8 @@ _step_from = _rk4_from
 
 @jit_noalloc
 def _switch(t, x, c, G, P, dx, aux, g):
-    _rhs_at(t, x, c, G, P, dx, aux)
+    th, w, acc, load = _inputs(t, c)
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
     for i in range(g.size):
         g[i] = aux[A_G_UP + i]
 

@@ -254,7 +254,24 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link,
 
 @jit_noalloc
 def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
-    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2.
+    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2
+    (:func:`_evaluate`)."""
+    _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, True)
+
+
+@jit_noalloc
+def evaluate_rate(x, th_in, w_in, a_in, load, G, P, dx, aux):
+    """:func:`evaluate` for a stage of a step, whose auxiliary quantities nobody reads: ``dx``
+    bitwise the same, but aux's seat-event functions (A_EV_*), midspan deflections and span
+    roles are not computed (left as they were) - four sines of the five of a level-1
+    evaluation, the costliest part after the two spans' atan2 (docs/performance.md)."""
+    _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, False)
+
+
+@jit_noalloc
+def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
+    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2
+    (``full`` False: :func:`evaluate_rate`).
 
     State layout: flexible shaft [phi1, phi2, w1, w2, modes], rigid shaft [phi2, w2, modes];
     modes = [q_up(1..n), q_low(1..n), v_up(1..n), v_low(1..n)] with q the Galerkin amplitudes of
@@ -394,8 +411,9 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
                                         * dx[base + k - 1])
             dx[base + 3 * n + k - 1] = (fl - wl2 * ql - 2.0 * P[P_ZETA] * k * P[P_W1_L]
                                         * dx[base + n + k - 1])
-            mid_u += qu * math.sin(0.5 * kpi)
-            mid_l += ql * math.sin(0.5 * kpi)
+            if full:
+                mid_u += qu * math.sin(0.5 * kpi)
+                mid_l += ql * math.sin(0.5 * kpi)
     aux[A_T_UP] = t_u
     aux[A_T_LOW] = t_l
     aux[A_TAU_IN] = tau_in
@@ -405,16 +423,18 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     aux[A_L_LOW] = ll
     aux[A_G_UP] = g_u
     aux[A_G_LOW] = g_l
+    aux[A_PHI1] = phi1
+    aux[A_W1] = w1
+    aux[A_N_UP] = nu
+    aux[A_N_LOW] = nl
+    if not full:
+        return
     aux[A_EV_US] = math.sin(math.pi * uus)
     aux[A_EV_UE] = math.sin(math.pi * uue)
     aux[A_EV_LS] = math.sin(math.pi * uls)
     aux[A_EV_LE] = math.sin(math.pi * ule)
     aux[A_MID_UP] = mid_u
     aux[A_MID_LOW] = mid_l
-    aux[A_PHI1] = phi1
-    aux[A_W1] = w1
-    aux[A_N_UP] = nu
-    aux[A_N_LOW] = nl
     # span roles by power flow, from the inputs (chainmodel.models.span_roles)
     aux[A_LOWER_TIGHT] = 1.0 if lower_tight(load, P[P_D2], P[P_J22], G[9] / G[10], w_in,
                                             a_in) else 0.0
