@@ -59,7 +59,10 @@ __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "out
 
 # --- the inputs of one communication step ------------------------------------------------------
 C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
-C_SIZE = 10
+#: the inputs last interpolated (:func:`_inputs_at`): at time c[C_IN_T] (NaN: none yet), the
+#: angle, speed, acceleration and load there
+C_IN_T, C_IN_TH, C_IN_W, C_IN_ACC, C_IN_LOAD = range(10, 15)
+C_SIZE = 15
 
 # --- step rule (FixedStepper.cfg) ----------------------------------------------
 #: explicit step (0: automatic), theta = h w of the tolerance, safety * stability limit, the
@@ -115,11 +118,25 @@ def _inputs(t, c):
 
 
 @jit_noalloc
+def _inputs_at(t, c):
+    """:func:`_inputs`, remembered in c for the last t: RK4's two middle stages share their
+    time, and its last stage's is the step end's (the switching functions' evaluation)."""
+    if t != c[C_IN_T]:
+        th, w, acc, load = _inputs(t, c)
+        c[C_IN_T] = t
+        c[C_IN_TH] = th
+        c[C_IN_W] = w
+        c[C_IN_ACC] = acc
+        c[C_IN_LOAD] = load
+    return c[C_IN_TH], c[C_IN_W], c[C_IN_ACC], c[C_IN_LOAD]
+
+
+@jit_noalloc
 def _rhs_at(t, x, c, G, P, dx, aux):
     """The derivative at (t, x) into ``dx``; aux is left partly stale (spans.evaluate_rate):
     in this loop every reader of aux (outputs, frequency, switching functions) follows a
     :func:`_switch`, the full evaluation."""
-    th, w, acc, load = _inputs(t, c)
+    th, w, acc, load = _inputs_at(t, c)
     evaluate_rate(x, th, w, acc, load, G, P, dx, aux)
 
 
@@ -168,7 +185,7 @@ _step_from = _rk4_from
 
 @jit_noalloc
 def _switch(t, x, c, G, P, dx, aux, g):
-    th, w, acc, load = _inputs(t, c)
+    th, w, acc, load = _inputs_at(t, c)
     evaluate(x, th, w, acc, load, G, P, dx, aux)
     for i in range(g.size):
         g[i] = aux[A_G_UP + i]
@@ -659,6 +676,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         c[C_ACC1] = acc[i]
         c[C_L0] = load[i - 1]
         c[C_L1] = load[i]
+        c[C_IN_T] = math.nan        # a new interpolant: nothing evaluated on it yet
         if started:
             # the evaluation that ended the last step was made at this point's own inputs;
             # it starts this step if the interpolant starts from the same ones (held or

@@ -112,6 +112,7 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
     jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
     jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
     ax = ay = bx = by = cf = sf = ct = st = 0.0
+    uf = ut = 0.0
     settled = False
     for it in range(14):
         if it == 7:
@@ -122,8 +123,11 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
         d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
-        jf2 = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
-        jt2 = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+        # the seat coordinates of the direction d: once settled, d is final and so are they
+        uf = (d + _HALF_PI + af - phf) / (2.0 * af)
+        ut = (d + _HALF_PI + at - pht) / (2.0 * at)
+        jf2 = math.floor(uf + edge)
+        jt2 = math.floor(ut + edge)
         if jf2 == jf and jt2 == jt:
             settled = True
             break
@@ -134,14 +138,14 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
         d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
+        uf = (d + _HALF_PI + af - phf) / (2.0 * af)
+        ut = (d + _HALF_PI + at - pht) / (2.0 * at)
     dx = bx - ax
     dy = by - ay
     length = math.hypot(dx, dy)
     # arms r sin(angle - direction), the direction's cosine and sine from the span vector
     cd = dx / length
     sd = dy / length
-    uf = (d + _HALF_PI + af - phf) / (2.0 * af)
-    ut = (d + _HALF_PI + at - pht) / (2.0 * at)
     return (length, rf * (sf * cd - cf * sd), rt * (st * cd - ct * sd), float(jf), float(jt), uf,
             ut, phf + 2.0 * af * jf, pht + 2.0 * at * jt, d)
 
