@@ -22,7 +22,8 @@ A last table splits the automatic-step runs' wall time into stepping and the res
 
 ``--targets``: only the table of issue 8's targets - the whole ``simulate()`` call over 1 s at
 the scenes' default output interval (1e-4 s), levels 1 and 2, best of --repeat (level 1 >= 100x
-real time, level 2 >= 50x: issue 20 item 7; issue 8 asked 20x), with the stepping / rest split and the evaluations per point.
+real time, level 2 >= 50x: issue 20 item 7; issue 8 asked 20x), with the stepping / rest split
+and the evaluations per point.
 
     python benchmarks/reduced.py [--duration 0.5] [--repeat 3] [--per-point] [--all]
     python benchmarks/reduced.py --targets [--repeat 5]
