@@ -698,7 +698,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         if want_states:
             for j in range(n):
                 states[i, j] = x[j]
-        th, ww, aa, ld = _inputs(t1, c)
+        th, ww, aa, ld = _inputs_at(t1, c)     # the step end's, usually remembered
         started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
         if want_out:
             if not started:
