@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba", "njit", "jit", "ENABLED", "enabled"]
+__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "ENABLED", "enabled"]
 
 
 def numba_requested() -> bool:
@@ -60,5 +60,19 @@ def jit(fn):
     itself; either way the plain function is at ``.py_func`` (the twin tests call)."""
     if ENABLED:
         return njit(fn, fastmath=False)
+    fn.py_func = fn
+    return fn
+
+
+def jit_noalloc(fn):
+    """:func:`jit` for a kernel that allocates no array and returns none (it only reads and
+    writes the arrays it is given, and makes views of them): compiled without numba's
+    reference counting (``_nrt=False``). Its callers hold every array it touches for the
+    whole call, so the counting is pure cost - on the level 1-2 stepping loop, where small
+    kernels pass the same arrays and row views down many calls per evaluation, its atomic
+    increments and decrements took half the time (docs/performance.md, issue 20 third pass).
+    The arithmetic is the same: results are bitwise those of :func:`jit`."""
+    if ENABLED:
+        return njit(fn, fastmath=False, _nrt=False)
     fn.py_func = fn
     return fn

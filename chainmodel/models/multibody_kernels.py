@@ -750,6 +750,8 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
     steps = 0
     evals = 0
     geometry = False        # scr holds the position-dependent part at x (its last step's end)
+    out_forces = False      # acc1, tension, fcon, side hold the forces at x from the outputs'
+                            # pass at the last point (a flexible input shaft, Verlet)
     for i in range(1, times.shape[0]):
         t0 = times[i - 1]
         H = times[i] - t0
@@ -768,9 +770,14 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
             # input shaft: the input angle does not move the seats): what _RUN would compute
             ang, spd, ac = _HERMITE(t0, t0, H, angle[i - 1], speed[i - 1], angle[i], speed[i])
             ld = load[i - 1] + (load[i] - load[i - 1]) * ((t0 - t0) / H if H > 0 else 0.0)
-            _FORCES(x[:nq], x[nq:], ang, spd, ac, ld, P, acc1, tension, fcon, side, seat_angle,
-                    scr, 0)
+            # the outputs' pass at this point made it already when its inputs are these (the
+            # acceleration does not enter with a flexible shaft): the same call, not redone
+            if not (out_forces and ang == angle[i - 1] and spd == speed[i - 1]
+                    and ld == load[i - 1]):
+                _FORCES(x[:nq], x[nq:], ang, spd, ac, ld, P, acc1, tension, fcon, side,
+                        seat_angle, scr, 0)
             started = True
+        out_forces = False
         bad = _RUN(method, x, t0, hh, m, t0, H, angle[i - 1], speed[i - 1], angle[i], speed[i],
                    load[i - 1], load[i], P, acc1, acc2, k1, k2, k3, k4, xt, tension, fcon, side,
                    dist, seat_angle, scr, started)
@@ -787,6 +794,7 @@ def _advance_points_loops(method, x_in, x_out, times, angle, speed, acc, load, P
             _OUT(x, angle[i], speed[i], acc[i], load[i], P, acc1, tension, fcon, side, dist,
                  seat_angle, scr, mids, tol, speed[i] < 0.0, tooth_ratio, spans, OUT[i],
                  method == 0 and P[I_RIGID] == 0.0)
+            out_forces = method == 0 and P[I_RIGID] == 0.0
             evals += 1
             for k in range(OUT.shape[1]):
                 if not math.isfinite(OUT[i, k]):
@@ -822,19 +830,23 @@ def _advance_held_loops(method, x_in, x_out, t0, t1, a0, w0, accel, ld, P, OM, c
 
 
 if HAVE_NUMBA:  # pragma: no branch
-    # numba resolves the loop's callees by their global names at compile time
-    _GEOM = njit(_geometry_loops)
-    _FORCES = njit(_forces_loops)
-    _ACCEL = njit(_accel_loops)
-    _HERMITE = njit(_hermite)
-    _run_fixed_jit = njit(_run_fixed_loops)
-    _ENGAGED = njit(_engaged_loops)
-    _SPANS = njit(_spans_loops)
-    _outputs_jit = njit(_outputs_loops)
+    # numba resolves the loop's callees by their global names at compile time. Every kernel
+    # but _HELD allocates no array and returns none: compiled without reference counting
+    # (_nrt=False, as chainmodel._numba.jit_noalloc; its callers hold the arrays), which only
+    # removes the atomic increments and decrements of the arrays passed down (no arithmetic
+    # change)
+    _GEOM = njit(_geometry_loops, _nrt=False)
+    _FORCES = njit(_forces_loops, _nrt=False)
+    _ACCEL = njit(_accel_loops, _nrt=False)
+    _HERMITE = njit(_hermite, _nrt=False)
+    _run_fixed_jit = njit(_run_fixed_loops, _nrt=False)
+    _ENGAGED = njit(_engaged_loops, _nrt=False)
+    _SPANS = njit(_spans_loops, _nrt=False)
+    _outputs_jit = njit(_outputs_loops, _nrt=False)
     _RUN = _run_fixed_jit
     _OUT = _outputs_jit
-    _OMEGA = njit(_omega_loops)
-    _POINTS = njit(_advance_points_loops)
+    _OMEGA = njit(_omega_loops, _nrt=False)
+    _POINTS = njit(_advance_points_loops, _nrt=False)
     _HELD = njit(_advance_held_loops)
 else:  # pragma: no cover - plain Python (slow; for debugging only)
     _GEOM, _FORCES = _geometry_loops, _forces_loops

@@ -50,7 +50,7 @@ from .outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENS
                       O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
-                    P_RHOA, P_RIGID, evaluate, jit)
+                    P_RHOA, P_RIGID, evaluate, evaluate_rate, jit, jit_noalloc)
 from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
@@ -59,7 +59,10 @@ __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "out
 
 # --- the inputs of one communication step ------------------------------------------------------
 C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
-C_SIZE = 10
+#: the inputs last interpolated (:func:`_inputs_at`): at time c[C_IN_T] (NaN: none yet), the
+#: angle, speed, acceleration and load there
+C_IN_T, C_IN_TH, C_IN_W, C_IN_ACC, C_IN_LOAD = range(10, 15)
+C_SIZE = 15
 
 # --- step rule (FixedStepper.cfg) ----------------------------------------------
 #: explicit step (0: automatic), theta = h w of the tolerance, safety * stability limit, the
@@ -91,7 +94,7 @@ EVENT_GAP = 1e-4
 
 
 
-@jit
+@jit_noalloc
 def _inputs(t, c):
     dt = c[C_DT]
     s = (t - c[C_T0]) / dt
@@ -114,13 +117,30 @@ def _inputs(t, c):
     return th, w, acc, load
 
 
-@jit
+@jit_noalloc
+def _inputs_at(t, c):
+    """:func:`_inputs`, remembered in c for the last t: RK4's two middle stages share their
+    time, and its last stage's is the step end's (the switching functions' evaluation)."""
+    if t != c[C_IN_T]:
+        th, w, acc, load = _inputs(t, c)
+        c[C_IN_T] = t
+        c[C_IN_TH] = th
+        c[C_IN_W] = w
+        c[C_IN_ACC] = acc
+        c[C_IN_LOAD] = load
+    return c[C_IN_TH], c[C_IN_W], c[C_IN_ACC], c[C_IN_LOAD]
+
+
+@jit_noalloc
 def _rhs_at(t, x, c, G, P, dx, aux):
-    th, w, acc, load = _inputs(t, c)
-    evaluate(x, th, w, acc, load, G, P, dx, aux)
+    """The derivative at (t, x) into ``dx``; aux is left partly stale (spans.evaluate_rate):
+    in this loop every reader of aux (outputs, frequency, switching functions) follows a
+    :func:`_switch`, the full evaluation."""
+    th, w, acc, load = _inputs_at(t, c)
+    evaluate_rate(x, th, w, acc, load, G, P, dx, aux)
 
 
-@jit
+@jit_noalloc
 def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     """One RK4 step with k1 = f(t, x) already in ``k1`` (three new evaluations)."""
     n = x.size
@@ -138,7 +158,7 @@ def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     return 3
 
 
-@jit
+@jit_noalloc
 def _verlet_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     """One velocity Verlet (kick-drift-kick) step of a second-order state [q, v] with
     k1 = f(t, x) already in ``k1`` (one new evaluation): v_half = v + h/2 a(t, x),
@@ -163,14 +183,15 @@ def _verlet_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
 _step_from = _rk4_from
 
 
-@jit
+@jit_noalloc
 def _switch(t, x, c, G, P, dx, aux, g):
-    _rhs_at(t, x, c, G, P, dx, aux)
+    th, w, acc, load = _inputs_at(t, c)
+    evaluate(x, th, w, acc, load, G, P, dx, aux)
     for i in range(g.size):
         g[i] = aux[A_G_UP + i]
 
 
-@jit
+@jit_noalloc
 def _changed(g, g0):
     for i in range(g.size):
         if g[i] * g0[i] < 0.0 and g[i] != 0.0 and g0[i] != 0.0:
@@ -178,7 +199,7 @@ def _changed(g, g0):
     return False
 
 
-@jit
+@jit_noalloc
 def _dense(x0, f0, x1, f1, H, s, out):
     """Dense output at s of a step from (x0, f0) at 0 to (x1, f1) at H: the cubic Hermite
     interpolant (an extrapolation for s > H); for H = 0 the line x0 + s f0."""
@@ -196,7 +217,7 @@ def _dense(x0, f0, x1, f1, H, s, out):
         out[i] = a * x0[i] + b * f0[i] + (1.0 - a) * x1[i] + d * f1[i]
 
 
-@jit
+@jit_noalloc
 def _secant(lo, hi, glo, ghi, g0):
     """Earliest secant root in [lo, hi] among the functions changed between g0 and ghi."""
     best = 1.0e300
@@ -212,7 +233,7 @@ def _secant(lo, hi, glo, ghi, g0):
     return min(max(best, lo), hi)
 
 
-@jit
+@jit_noalloc
 def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, aux, V):
     """Earliest sign change (relative to g0) of the switching functions in [lo, hi] on the dense
     output :func:`_dense` (x0, f0; x1, f1; H), g_lo and g_hi the functions at the ends: safeguarded
@@ -270,7 +291,7 @@ def _locate(t, x0, f0, x1, f1, H, lo, hi, g_lo, g_hi, g0, tol, c, G, P, xm, dx, 
     return _secant(lo, hi, glo, gh, g0), evals
 
 
-@jit
+@jit_noalloc
 def _cross(t, x, h, t_end, c, G, P, W, V, aux):
     """The step [t, t_end] (h = t_end - t) from ``x`` (f(t, x) in W[3]) over which a switching
     function changed sign (plain step's end state and derivative in W[0], W[8], functions at both
@@ -385,7 +406,7 @@ def _cross(t, x, h, t_end, c, G, P, W, V, aux):
     return s, evals
 
 
-@jit
+@jit_noalloc
 def omega_estimate(aux, G, P, Q):
     """Highest natural frequency [rad/s] at the state of the evaluation ``aux``: the sprockets'
     bound Q_W_SPROCKET (stiffest spans, TorsionalModel.sprocket_frequencies) and, at level 2,
@@ -408,7 +429,7 @@ def omega_estimate(aux, G, P, Q):
     return w
 
 
-@jit
+@jit_noalloc
 def _step_bound(w, h_event, cfg):
     """h_max of the module docstring for the frequency w (automatic step)."""
     h = math.inf
@@ -421,7 +442,7 @@ def _step_bound(w, h_event, cfg):
     return h
 
 
-@jit
+@jit_noalloc
 def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, started):
     """RK4 from (t0, x) to t1, in place on ``x``, with the step rule and guard of the module
     docstring; a step over which a switching function changes sign is redone across the change
@@ -495,20 +516,20 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
     return STATUS_OK, steps, events, evals, t, 0.0
 
 
-@jit
+@jit_noalloc
 def _omega_at(t, x, aux, c, G, P, Q):
     """The frequency of the step rule at (t, x), whose evaluation is in ``aux``."""
     return omega_estimate(aux, G, P, Q)
 
 
-@jit
+@jit_noalloc
 def _event_step(c, Q):
     """A quarter tooth period at the larger input speed of the communication step's ends."""
     speed = max(abs(c[C_W0]), abs(c[C_W1]))
     return Q[Q_EVENT_ANGLE] / speed if speed > 0.0 else math.inf
 
 
-@jit
+@jit_noalloc
 def _after_step(t, x, c, P, Q):
     """STATUS_NONFINITE when the state after a step is not finite, else STATUS_OK."""
     for i in range(x.size):
@@ -517,7 +538,7 @@ def _after_step(t, x, c, P, Q):
     return STATUS_OK
 
 
-@jit
+@jit_noalloc
 def fill_outputs(x, aux, w_in, P, Q, out):
     """The 15 outputs (ALL_OUTPUTS order) from the state x and the kernel's evaluation ``aux``
     there; w_in the input-shaft speed. The tight span is the one the driver pulls for the
@@ -572,7 +593,7 @@ def fill_outputs(x, aux, w_in, P, Q, out):
     out[O_CHAIN_MIN_LINK_TENSION] = min(tight, slack) + centrifugal
 
 
-@jit
+@jit_noalloc
 def _finite(v):
     for k in range(v.size):
         if not math.isfinite(v[k]):
@@ -580,7 +601,7 @@ def _finite(v):
     return True
 
 
-@jit
+@jit_noalloc
 def outputs_into(x, th, w, acc, load, G, P, Q, dx, aux, out):
     """Every output at (x, inputs) into ``out`` (one kernel evaluation); True when all are
     finite."""
@@ -598,7 +619,7 @@ def outputs_many(X, th, w, acc, load, G, P, Q, OUT):
         outputs_into(X[i], th[i], w[i], acc[i], load[i], G, P, Q, dx, aux, OUT[i])
 
 
-@jit
+@jit_noalloc
 def _check(x, P, Q):
     """STATUS_AMPLITUDE when a span mode's amplitude exceeds Q_AMP_LIMIT (ModalModel.check)."""
     n = int(P[P_MODES])
@@ -655,6 +676,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         c[C_ACC1] = acc[i]
         c[C_L0] = load[i - 1]
         c[C_L1] = load[i]
+        c[C_IN_T] = math.nan        # a new interpolant: nothing evaluated on it yet
         if started:
             # the evaluation that ended the last step was made at this point's own inputs;
             # it starts this step if the interpolant starts from the same ones (held or
@@ -676,7 +698,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
         if want_states:
             for j in range(n):
                 states[i, j] = x[j]
-        th, ww, aa, ld = _inputs(t1, c)
+        th, ww, aa, ld = _inputs_at(t1, c)     # the step end's, usually remembered
         started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
         if want_out:
             if not started:
@@ -692,7 +714,7 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
     return times.size - 1, STATUS_OK, total, events, evals, logged, times[-1], 0.0
 
 
-@jit
+@jit_noalloc
 def _switch_at(x, th, w, acc, load, G, P, dx, aux, g):
     """:func:`_switch` at given inputs."""
     evaluate(x, th, w, acc, load, G, P, dx, aux)

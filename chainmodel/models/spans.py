@@ -30,10 +30,10 @@ import math
 
 import numpy as np
 
-from .._numba import ENABLED, jit
+from .._numba import ENABLED, jit, jit_noalloc
 from .span_roles import lower_tight
 
-__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "G_SIZE"]
+__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "jit_noalloc", "G_SIZE"]
 
 _EDGE = 1e-9          # as chainmodel.kinematics.wrapping._EDGE: an endpoint at an event is past it
 _HALF_PI = 0.5 * math.pi
@@ -63,18 +63,38 @@ def geometry_constants(drive) -> np.ndarray:
     return np.concatenate([head] + tables)
 
 
-@jit
+@jit_noalloc
 def _seat(cx, cy, r, cph, sph, G, table, n, j):
     """Position of seat j (cos and sin of its angle phase + 2 pi j / n too) of a sprocket at
     (cx, cy) with pitch radius r, cph and sph the cosine and sine of its phase; ``table`` the
     offset of its cos/sin table in G."""
-    k = int(j) % n
+    k = int(j)
+    # k % n without an integer division for the seats a span meets (-n <= k < 2n)
+    if k >= n:
+        k = k - n if k < 2 * n else k % n
+    elif k < 0:
+        k = k + n if k >= -n else k % n
     c = cph * G[table + k] - sph * G[table + n + k]
     s = sph * G[table + k] + cph * G[table + n + k]
     return cx + r * c, cy + r * s, c, s
 
 
-@jit
+@jit_noalloc
+def _mod_two_pi(v):
+    """``v % (2 pi)`` (Python's float modulo), bitwise, without a call to fmod for the values
+    _span meets (-2 pi < v < 4 pi): there fmod is exact and equals v, v - 2 pi (exact by
+    Sterbenz's lemma) or v (then + 2 pi, rounded as Python rounds it). fmod was a tenth of the
+    level-1 stepping time (docs/performance.md, issue 20 third pass)."""
+    if 0.0 <= v < _TWO_PI:
+        return v + 0.0              # -0.0 % w is +0.0
+    if _TWO_PI <= v < 2.0 * _TWO_PI:
+        return v - _TWO_PI
+    if -_TWO_PI < v < 0.0:
+        return v + _TWO_PI
+    return v % _TWO_PI
+
+
+@jit_noalloc
 def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, spt, tt, nt, dir0,
           G):
     """One straight span between two sprockets (scalar form of wrapping._span).
@@ -92,6 +112,7 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
     jf = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
     jt = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
     ax = ay = bx = by = cf = sf = ct = st = 0.0
+    uf = ut = 0.0
     settled = False
     for it in range(14):
         if it == 7:
@@ -101,9 +122,12 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
-        jf2 = math.floor((d + _HALF_PI + af - phf) / (2.0 * af) + edge)
-        jt2 = math.floor((d + _HALF_PI + at - pht) / (2.0 * at) + edge)
+        d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
+        # the seat coordinates of the direction d: once settled, d is final and so are they
+        uf = (d + _HALF_PI + af - phf) / (2.0 * af)
+        ut = (d + _HALF_PI + at - pht) / (2.0 * at)
+        jf2 = math.floor(uf + edge)
+        jt2 = math.floor(ut + edge)
         if jf2 == jf and jt2 == jt:
             settled = True
             break
@@ -113,20 +137,20 @@ def _span(cfx, cfy, rf, af, phf, cpf, spf, tf, nf, ctx, cty, rt, at, pht, cpt, s
         ax, ay, cf, sf = _seat(cfx, cfy, rf, cpf, spf, G, tf, nf, jf)
         bx, by, ct, st = _seat(ctx, cty, rt, cpt, spt, G, tt, nt, jt)
         nd = math.atan2(by - ay, bx - ax)
-        d = dir0 + ((nd - dir0 + math.pi) % _TWO_PI) - math.pi
+        d = dir0 + _mod_two_pi(nd - dir0 + math.pi) - math.pi
+        uf = (d + _HALF_PI + af - phf) / (2.0 * af)
+        ut = (d + _HALF_PI + at - pht) / (2.0 * at)
     dx = bx - ax
     dy = by - ay
     length = math.hypot(dx, dy)
     # arms r sin(angle - direction), the direction's cosine and sine from the span vector
     cd = dx / length
     sd = dy / length
-    uf = (d + _HALF_PI + af - phf) / (2.0 * af)
-    ut = (d + _HALF_PI + at - pht) / (2.0 * at)
     return (length, rf * (sf * cd - cf * sd), rt * (st * cd - ct * sd), float(jf), float(jt), uf,
             ut, phf + 2.0 * af * jf, pht + 2.0 * at * jt, d)
 
 
-@jit
+@jit_noalloc
 def span_geometry(phi1, phi2, G):
     """Both spans for one pair of rotations (scalar form of wrapping.chain_geometry).
 
@@ -190,19 +214,19 @@ P_SIZE = 27
 A_SIZE = 20
 
 
-@jit
+@jit_noalloc
 def _galerkin_g(k):
     """G_m of seed 004 eq 59: 2 int_0^1 sin(m pi x) dx."""
     return 2.0 * (1.0 - (-1.0) ** k) / (k * math.pi)
 
 
-@jit
+@jit_noalloc
 def _galerkin_e(k):
     """E_m of seed 004 eq 59: 2 int_0^1 x sin(m pi x) dx."""
     return -2.0 * (-1.0) ** k / (k * math.pi)
 
 
-@jit
+@jit_noalloc
 def _coriolis(k, j):
     """Gyroscopic Galerkin coefficient of 2 s w_xt on sin modes: 2 int_0^1 sin(k pi x)
     j pi cos(j pi x) dx * 2 / 2 = 2 k j (1 - (-1)^(k+j)) / (k^2 - j^2), zero for k = j.
@@ -213,7 +237,7 @@ def _coriolis(k, j):
     return 2.0 * k * j * (1.0 - (-1.0) ** (k + j)) / (k * k - j * j)
 
 
-@jit
+@jit_noalloc
 def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
              seat_slack, length_rate, links_compliance):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
@@ -232,9 +256,26 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link,
     return 0.0, switch
 
 
-@jit
+@jit_noalloc
 def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
-    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2.
+    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2
+    (:func:`_evaluate`)."""
+    _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, True)
+
+
+@jit_noalloc
+def evaluate_rate(x, th_in, w_in, a_in, load, G, P, dx, aux):
+    """:func:`evaluate` for a stage of a step, whose auxiliary quantities nobody reads: ``dx``
+    bitwise the same, but aux's seat-event functions (A_EV_*), midspan deflections and span
+    roles are not computed (left as they were) - four sines of the five of a level-1
+    evaluation, the costliest part after the two spans' atan2 (docs/performance.md)."""
+    _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, False)
+
+
+@jit_noalloc
+def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
+    """Right-hand side ``dx`` and auxiliary quantities ``aux`` (A_* indices) of levels 1-2
+    (``full`` False: :func:`evaluate_rate`).
 
     State layout: flexible shaft [phi1, phi2, w1, w2, modes], rigid shaft [phi2, w2, modes];
     modes = [q_up(1..n), q_low(1..n), v_up(1..n), v_low(1..n)] with q the Galerkin amplitudes of
@@ -374,8 +415,9 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
                                         * dx[base + k - 1])
             dx[base + 3 * n + k - 1] = (fl - wl2 * ql - 2.0 * P[P_ZETA] * k * P[P_W1_L]
                                         * dx[base + n + k - 1])
-            mid_u += qu * math.sin(0.5 * kpi)
-            mid_l += ql * math.sin(0.5 * kpi)
+            if full:
+                mid_u += qu * math.sin(0.5 * kpi)
+                mid_l += ql * math.sin(0.5 * kpi)
     aux[A_T_UP] = t_u
     aux[A_T_LOW] = t_l
     aux[A_TAU_IN] = tau_in
@@ -385,16 +427,18 @@ def evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux):
     aux[A_L_LOW] = ll
     aux[A_G_UP] = g_u
     aux[A_G_LOW] = g_l
+    aux[A_PHI1] = phi1
+    aux[A_W1] = w1
+    aux[A_N_UP] = nu
+    aux[A_N_LOW] = nl
+    if not full:
+        return
     aux[A_EV_US] = math.sin(math.pi * uus)
     aux[A_EV_UE] = math.sin(math.pi * uue)
     aux[A_EV_LS] = math.sin(math.pi * uls)
     aux[A_EV_LE] = math.sin(math.pi * ule)
     aux[A_MID_UP] = mid_u
     aux[A_MID_LOW] = mid_l
-    aux[A_PHI1] = phi1
-    aux[A_W1] = w1
-    aux[A_N_UP] = nu
-    aux[A_N_LOW] = nl
     # span roles by power flow, from the inputs (chainmodel.models.span_roles)
     aux[A_LOWER_TIGHT] = 1.0 if lower_tight(load, P[P_D2], P[P_J22], G[9] / G[10], w_in,
                                             a_in) else 0.0
