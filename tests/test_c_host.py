@@ -142,8 +142,13 @@ def fmu_vars(chaindrive_fmu):
 
 def run_master(master, fmu_dir, fmu_vars, level, steps, step_ns=100_000, env=None,
                outputs=None):
-    """Run the C master under a bare environment (``env`` only: what ``env -i`` gives)."""
+    """Run the C master under a bare environment (``env`` only: what ``env -i`` gives), plus
+    the test session's kernel cache folder (CHAINMODEL_CACHE_DIR, tests/conftest.py): without it
+    the FMU's Python would compile into the user's ~/.cache, which the suite must leave as it
+    found it. No variable that helps a host find or start Python is passed."""
     guid, vr = fmu_vars
+    cache = os.environ.get("CHAINMODEL_CACHE_DIR")
+    env = dict({"CHAINMODEL_CACHE_DIR": cache} if cache else {}, **(env or {}))
     outputs = outputs or [o.name for o in ALL_OUTPUTS]
     args = [str(master), str(fmu_dir / "binaries" / "linux64" / "ChainDrive.so"),
             (fmu_dir / "resources").as_uri(), guid, str(vr["fidelity"]), str(level),
