@@ -317,3 +317,38 @@ def test_launch_refuses_what_it_cannot_launch(tmp_path, chaindrive_fmu):
     proc = launch(tmp_path / "missing.fmu")
     assert proc.returncode == 2 and "missing.fmu" in proc.stderr
     assert not (tmp_path / "out.fmu").exists()
+
+
+def test_c_host_runs_torque_causality_as_fmpy_does(master, tmp_path):
+    """An FMU built with torque causality as its default (``build_fmu.py --default
+    input_shaft.causality=torque``; the master sets no String) run by the C master under env -i
+    at level 1, the master's first input wired to motor.torque instead of input_shaft.angle: the
+    outputs, motor.angle and motor.speed among them, equal fmpy's on the same calls bit for
+    bit, and the rotor turns under the torque."""
+    from fmpy import extract, read_model_description
+    fmu = tmp_path / "Torque.fmu"
+    proc = subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--out", str(fmu), "-q",
+                           "--default", "input_shaft.causality=torque", "--warm", "none"],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    wired = dict(vr, **{"input_shaft.angle": vr["motor.torque"]})
+    stop, step = 0.004, 1e-4
+    times, step_ns = grid(stop, step)
+    names = [o.name for o in ALL_OUTPUTS] + ["motor.angle", "motor.speed"]
+    proc = run_master(master, Path(extract(str(fmu), str(tmp_path / "x"))), (md.guid, wired), 1,
+                      len(times) - 1, step_ns, outputs=names)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    c_host = np.array([[float(x) for x in line.split()] for line in proc.stdout.splitlines()])
+    # the master's inputs: first = SPEED * t (here motor.torque, N.m), then SPEED, LOAD
+    ref = run_fmu(fmu, "fmpy", stop_time=stop, step_size=step, start_values={"fidelity": 1},
+                  inputs={"motor.torque": lambda t: SPEED * t, "input_shaft.speed": SPEED,
+                          "load.torque": LOAD}, outputs=names)
+    np.testing.assert_array_equal(c_host[:, 0], ref.time)
+    differing = [n for j, n in enumerate(names)
+                 if not np.array_equal(c_host[:, j + 1], ref.outputs[n])]
+    assert not differing, differing
+    motor_speed = c_host[:, 1 + names.index("motor.speed")]
+    # torque causality, not angle causality (where motor.speed would be the speed input, 12)
+    assert np.all(motor_speed[1:] != SPEED) and np.all(np.isfinite(c_host))
