@@ -212,7 +212,7 @@ class CosimSession:
     def torque_causal(self) -> bool:
         """input_shaft.causality = torque: motor.torque drives a rotor the model integrates
         (chainmodel.models.torque_causality); the angle and speed inputs are not read."""
-        return self.stepper is not None and hasattr(self.stepper.model, "motor_outputs")
+        return self.stepper is not None and self.params["input_shaft.causality"] == "torque"
 
     def motor_values(self, fresh: bool = False) -> tuple[float, float]:
         """motor.angle, motor.speed: the rotor's state in torque causality; in angle causality

@@ -361,7 +361,7 @@ class Scene:
         for p in P.PARAMETERS:
             if p.name in self.origins:
                 out[p.name] = self.origins[p.name]
-            elif p.name in getattr(self, "_filled", {}):
+            elif p.name in self._filled:
                 out[p.name] = self._filled[p.name]
             elif p.name == "chain.pretension" and self.static_tension is not None:
                 out[p.name] = f"static_tension: solved for {self.static_tension:g} N at rest"
