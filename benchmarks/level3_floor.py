@@ -42,7 +42,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 import chainmodel  # noqa: E402
-from chainmodel.models import multibody_kernels as K  # noqa: E402
+from chainmodel.kernels import multibody as K  # noqa: E402
 from chainmodel.scene import load_scene  # noqa: E402
 from chainmodel.simulation import run_scene  # noqa: E402
 from chainmodel.units import RPM  # noqa: E402

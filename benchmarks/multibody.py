@@ -73,7 +73,7 @@ def stepper_table(joint_damping=0.0, links_list=(46, 100, 200)):
     extra = {"chain.joint_damping": joint_damping}
     print()
     print(f"machine: {machine()}; python {platform.python_version()}; "
-          f"numba {'on' if chainmodel.models.multibody_kernels.numba_enabled() else 'off'}; "
+          f"numba {'on' if chainmodel.kernels.multibody.numba_enabled() else 'off'}; "
           f"chain.joint_damping = {joint_damping:g} N.m.s/rad")
     model = scene_for(**extra).model()
     x0 = model.initial_state(scene_for().inputs(0))
@@ -108,7 +108,7 @@ def stepper_table(joint_damping=0.0, links_list=(46, 100, 200)):
 def overhead():
     """Where the time goes: the compiled Verlet loop alone over 1 s, and full runs with outputs
     every 1e-4 s and 1e-3 s (CPU seconds per simulated second)."""
-    from chainmodel.models import multibody_kernels as K
+    from chainmodel.kernels import multibody as K
     sc = scene_for()
     run_scene(sc.with_overrides(duration=0.01))  # warm the compiled code
     print()

@@ -40,7 +40,7 @@ import numpy as np
 
 import chainmodel
 from chainmodel import integrate, simulation
-from chainmodel.models import spans
+from chainmodel.kernels import spans
 
 INTERVALS = (1e-2, 1e-3)
 BATCHED = "batched" in inspect.signature(simulation.run_scene).parameters

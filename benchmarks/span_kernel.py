@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 import chainmodel
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 
 
 @numba.njit

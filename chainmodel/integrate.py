@@ -57,9 +57,9 @@ from .models.base import Inputs, Model, SimulationDiverged
 # the loops' status codes, defined once in the loop of levels 1-2 (1 diverged, 2 explicit step
 # above the stable limit, 3 the model's range left, 4 non-finite outputs; multibody_kernels
 # uses the same numbers)
-from .models.outputs import OUTPUT_NAMES
-from .models.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
-from .plain_loop import run_interval
+from .outputs import OUTPUT_NAMES
+from .kernels.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
+from .kernels.plain_loop import run_interval
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
            "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",

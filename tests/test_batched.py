@@ -13,7 +13,7 @@ import pytest
 import chainmodel
 from chainmodel import simulation
 from chainmodel.models import Inputs, SimulationDiverged
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 from chainmodel.scene import OperatingPoint
 
 needs_numba = pytest.mark.skipif(not S.NUMBA, reason="the batched path is the compiled one")

@@ -20,7 +20,7 @@ from chainmodel.analysis.summary import dominant_frequency, tooth_ratio
 from chainmodel.integrate import RK4, Verlet
 from chainmodel.kinematics.wrapping import chain_geometry
 from chainmodel.models import SimulationDiverged, model_class
-from chainmodel.models import multibody_kernels as K
+from chainmodel.kernels import multibody as K
 from chainmodel.models.base import ALL_OUTPUTS, Inputs
 from chainmodel.models.kinematic import KinematicModel
 from chainmodel.models.multibody import MultibodyModel

@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import pytest
 
-from chainmodel import integrate, plain_loop
-from chainmodel.models import rk4_loop
+from chainmodel import integrate
+from chainmodel.kernels import plain_loop
+from chainmodel.kernels import rk4_loop
 
 SHARED = ("_interval", "_cross", "_locate", "_secant", "_dense", "_changed", "_step_bound",
           "_rk4_from", "_verlet_from")

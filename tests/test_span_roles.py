@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel.models.span_roles import lower_tight, lower_tight_many
+from chainmodel.kernels.span_roles import lower_tight, lower_tight_many
 
 
 def _balance(name, level, rpm, duration=1.2, start=0.6, **kw):

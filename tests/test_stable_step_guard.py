@@ -18,7 +18,7 @@ import pytest
 import chainmodel
 from chainmodel.integrate import stability_limit
 from chainmodel.models import Inputs, SimulationDiverged
-from chainmodel.models import multibody_kernels as MK
+from chainmodel.kernels import multibody as MK
 
 LOAD = 400.0     # N.m on the driven sprocket (its pitch radius is 73 mm)
 

@@ -19,7 +19,7 @@ import pytest
 
 import chainmodel
 from chainmodel.integrate import OUTPUT_NAMES
-from chainmodel.models import multibody_kernels
+from chainmodel.kernels import multibody as multibody_kernels
 
 STEPS = (1e-5, 1e-4, 1e-3, 1e-2)
 DURATION = 0.3          # s; compared from 0.1 s on, every 10 ms (the coarsest step's points)

@@ -22,7 +22,7 @@ from chainmodel.integrate import RK4, Adaptive
 from chainmodel.kinematics import driven_rotation
 from chainmodel.kinematics.wrapping import chain_geometry
 from chainmodel.models import MODEL_CLASSES, Inputs
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 from chainmodel.models.torsional import TorsionalModel, seat_stiffness
 from chainmodel.presets import reference_values
 
@@ -309,7 +309,7 @@ def test_kernel_plain_python_equals_compiled():
 def test_runs_without_numba():
     """The plain-Python fallback (CHAINMODEL_NUMBA=0) runs a scene and agrees with the compiled
     run."""
-    code = ("import chainmodel, json; from chainmodel.models import spans;"
+    code = ("import chainmodel, json; from chainmodel.kernels import spans;"
             "r = chainmodel.simulate('C1', fidelity=1, duration=0.02, output_interval=1e-3);"
             "print(json.dumps([spans.NUMBA, float(r['driven.angle'][-1]), "
             "float(r['tight_span.tension'][-1])]))")
@@ -380,8 +380,8 @@ def test_compiled_static_equilibrium_is_at_rest_and_equals_its_twin(name, level,
     acceleration of the model's own right-hand side vanishes to round-off relative to the
     accelerations one degree of rotation away would cause - and the plain-Python twin of the
     same functions finds the same state."""
-    from chainmodel.models import equilibrium as E
-    from chainmodel.models.kinematic_kernel import driven_rotation, fourbar_constants
+    from chainmodel.kernels import equilibrium as E
+    from chainmodel.kernels.kinematic import driven_rotation, fourbar_constants
     m = chainmodel.Scene.from_preset(name, fidelity=level).model()
     u = Inputs(0.37, 0.0, load)
     x = m.initial_state(u)

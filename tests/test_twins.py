@@ -25,17 +25,17 @@ from chainmodel.scene import load_scene
 
 #: (module, dispatcher) of every compiled kernel that Python code calls
 ENTRY = (
-    ("chainmodel.models.spans", "evaluate"),
-    ("chainmodel.models.rk4_loop", "advance_points"),
-    ("chainmodel.models.rk4_loop", "advance_held"),
-    ("chainmodel.models.rk4_loop", "outputs_into"),
-    ("chainmodel.models.rk4_loop", "omega_estimate"),
-    ("chainmodel.models.kinematic_kernel", "driven_rotation"),
-    ("chainmodel.models.equilibrium", "static_state"),
-    ("chainmodel.models.multibody_kernels", "_accel_jit"),
-    ("chainmodel.models.multibody_kernels", "_outputs_jit"),
-    ("chainmodel.models.multibody_kernels", "_POINTS"),
-    ("chainmodel.models.multibody_kernels", "_HELD"),
+    ("chainmodel.kernels.spans", "evaluate"),
+    ("chainmodel.kernels.rk4_loop", "advance_points"),
+    ("chainmodel.kernels.rk4_loop", "advance_held"),
+    ("chainmodel.kernels.rk4_loop", "outputs_into"),
+    ("chainmodel.kernels.rk4_loop", "omega_estimate"),
+    ("chainmodel.kernels.kinematic", "driven_rotation"),
+    ("chainmodel.kernels.equilibrium", "static_state"),
+    ("chainmodel.kernels.multibody", "_accel_jit"),
+    ("chainmodel.kernels.multibody", "_outputs_jit"),
+    ("chainmodel.kernels.multibody", "_POINTS"),
+    ("chainmodel.kernels.multibody", "_HELD"),
 )
 
 needs_numba = pytest.mark.skipif(not _numba.enabled(),

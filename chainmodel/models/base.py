@@ -63,7 +63,7 @@ class Inputs:
 
 
 # the outputs of DESIGN.md: chainmodel.models.outputs (re-exported here)
-from .outputs import ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, OutputSpec  # noqa: E402
+from ..outputs import ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, OutputSpec  # noqa: E402
 
 QUASI_STATIC = "quasi-static estimate at this fidelity level: "
 

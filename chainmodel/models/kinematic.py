@@ -36,8 +36,8 @@ from ..kinematics.wrapping import chain_geometry
 from . import limits
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension,
                    check_pretension, quasi_static_extras)
-from .kinematic_kernel import level0_outputs
-from .span_roles import lower_tight_many
+from ..kernels.kinematic import level0_outputs
+from ..kernels.span_roles import lower_tight_many
 from .static_tension import (loose_chain_error, pretension_error,  # noqa: F401  (re-exported)
                              seat_series_compliance, seat_stiffness, seated_tension,
                              static_span_tension)
@@ -185,8 +185,8 @@ class KinematicModel(Model):
     @cached_property
     def _kernel_constants(self):
         """(K, G, C) of the scalar compiled evaluation (:mod:`.kinematic_kernel`)."""
-        from . import kinematic_kernel as KK
-        from .spans import geometry_constants
+        from ..kernels import kinematic as KK
+        from ..kernels.spans import geometry_constants
         p, d = self.params, self.drive
         C = np.empty(KK.C_SIZE)
         C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],

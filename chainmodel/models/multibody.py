@@ -48,10 +48,10 @@ from ..geometry import Drive
 from ..kinematics import driven_rotation
 from ..kinematics import fourbar as fb
 from ..kinematics.wrapping import chain_geometry, roller_positions
-from . import multibody_kernels as K
+from ..kernels import multibody as K
 from .base import Inputs, Model, SimulationDiverged
-from .span_roles import lower_tight_many
-from .spans import geometry_constants, span_geometry
+from ..kernels.span_roles import lower_tight_many
+from ..kernels.spans import geometry_constants, span_geometry
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 

@@ -43,8 +43,8 @@ import numpy as np
 
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
-from . import rk4_loop as L
-from . import spans as S
+from ..kernels import rk4_loop as L
+from ..kernels import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_series_compliance, seat_stiffness, static_span_tension
@@ -204,9 +204,9 @@ class TorsionalModel(Model):
         held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
         balances the span tensions, found by bracketing from the level-0 configuration
         (:func:`chainmodel.models.equilibrium.static_state`, one compiled call)."""
-        from . import equilibrium as E
-        from .kinematic_kernel import driven_rotation as scalar_rotation
-        from .kinematic_kernel import fourbar_constants
+        from ..kernels import equilibrium as E
+        from ..kernels.kinematic import driven_rotation as scalar_rotation
+        from ..kernels.kinematic import fourbar_constants
         d = self.drive
         modal = self._modal_initial(u)
         x = np.concatenate([np.zeros(self.n_sprocket_states), modal])

@@ -20,8 +20,8 @@ import numpy as np
 
 from .._numba import ENABLED, enabled, njit
 from .span_roles import lower_tight
-from .outputs import OUTPUT_NAMES  # noqa: F401  (re-exported: MultibodyModel reads it here)
-from .outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
+from ..outputs import OUTPUT_NAMES  # noqa: F401  (re-exported: MultibodyModel reads it here)
+from ..outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
                       O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
                       O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
                       O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,

@@ -30,7 +30,7 @@ import types
 
 import numpy as np
 
-from .models import rk4_loop
+from . import rk4_loop
 
 __all__ = ["LoopContext", "LOOPS", "run_interval"]
 
