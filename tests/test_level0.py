@@ -293,7 +293,7 @@ def test_static_tension_c1_within_table1_bounds():
     assert T0 == pytest.approx(mean, rel=0.05)
 
 
-# --- the scalar compiled evaluation (models/kinematic_kernel.py) --------------------------------
+# --- the scalar compiled evaluation (kernels/kinematic.py) --------------------------------
 
 @pytest.mark.parametrize("name", ["xu2010", "C1", "coarse", "fine"])
 def test_scalar_kernel_equals_the_vectorised_library(name):
@@ -324,7 +324,7 @@ def test_scalar_kernel_equals_the_vectorised_library(name):
 
 
 def test_scalar_rotation_equals_driven_rotation_over_many_periods():
-    """kinematic_kernel.driven_rotation against kinematics.driven_rotation, forward and reverse,
+    """kernels.kinematic.driven_rotation against kinematics.driven_rotation, forward and reverse,
     on a fine grid over several tooth periods (seating and release inside) and at the event
     angles themselves."""
     from chainmodel.kernels.kinematic import driven_rotation, fourbar_constants

@@ -24,7 +24,8 @@ import math
 
 import numpy as np
 
-from .spans import jit, span_geometry
+from .._numba import jit
+from .spans import span_geometry
 from .span_roles import lower_tight
 
 __all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "K_SIZE", "C_SIZE"]
@@ -129,7 +130,7 @@ def driven_rotation(phi, w, a, reverse, K):
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
     acc) and the load torque into ``out``: the tight span is the one the driver pulls for the
-    direction of the transmitted torque (chainmodel.models.span_roles), and the reported span
+    direction of the transmitted torque (chainmodel.kernels.span_roles), and the reported span
     and link tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
     force not (KinematicModel.evaluate). True when every output is finite."""
     rev = speed < 0.0
