@@ -52,7 +52,7 @@ from ..kernels import multibody_layout as K
 from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_loops import run_held, run_points
 from ..kernels.multibody_outputs import engaged_numpy, fill_outputs, span_ends
-from ..outputs import OUTPUT_NAMES
+from ..outputs import O_DRIVER_ANGLE, O_DRIVER_SPEED, O_VELOCITY_RATIO, OUTPUT_NAMES
 from .base import Inputs, Model, SimulationDiverged
 from ..kernels.spans import geometry_constants, span_geometry
 
@@ -320,7 +320,7 @@ class MultibodyModel(Model):
                        speed, acceleration, torque, self.P, self._omega_constants,
                        self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
                        self.drive.tooth_ratio, self._spans_out, out)
-        if res[1] == 0 and abs(out[1, 1]) < REST_SPEED:
+        if res[1] == 0 and abs(out[1, O_DRIVER_SPEED]) < REST_SPEED:
             self._ratio_at_rest(out[1:2], np.array([angle + speed * (t1 - t0)]),
                                 np.array([speed]))
         return res
@@ -344,19 +344,20 @@ class MultibodyModel(Model):
     def _ratio_at_rest(self, rows, angle, speed) -> None:
         """velocity_ratio of the rows whose driver is at rest (|speed| < REST_SPEED): the exact
         four-bar ratio at the driver's angle (level 0), as :meth:`outputs` reports it."""
-        rest = np.abs(rows[:, 1]) < REST_SPEED
+        rest = np.abs(rows[:, O_DRIVER_SPEED]) < REST_SPEED
         if not rest.any():
             return
         for rev in (False, True):
             sel = rest & ((np.asarray(speed) < 0) == rev)
             if sel.any():
-                rows[sel, 9] = driven_rotation(self.drive, rows[sel, 0], reverse=rev).velocity_ratio
+                rows[sel, O_VELOCITY_RATIO] = driven_rotation(self.drive, rows[sel, O_DRIVER_ANGLE],
+                                                              reverse=rev).velocity_ratio
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
         """Every output (ALL_OUTPUTS order) into ``out``: one kernel call."""
         fill_outputs(x, angle, speed, acceleration, torque, self.P, self.ws, self._mids,
                      self._engaged_tol, speed < 0, self.drive.tooth_ratio, self._spans_out, out)
-        if abs(out[1]) < REST_SPEED:
+        if abs(out[O_DRIVER_SPEED]) < REST_SPEED:
             self._ratio_at_rest(out.reshape(1, -1), np.array([angle]), np.array([speed]))
 
     def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
