@@ -53,8 +53,8 @@ from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_loops import run_held, run_points
 from ..kernels.multibody_outputs import engaged_numpy, fill_outputs, span_ends
 from ..outputs import O_DRIVER_ANGLE, O_DRIVER_SPEED, O_VELOCITY_RATIO, OUTPUT_NAMES
-from .base import Inputs, Model, SimulationDiverged
 from ..kernels.spans import geometry_constants, span_geometry
+from .base import Inputs, Model, SimulationDiverged
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 
@@ -297,8 +297,9 @@ class MultibodyModel(Model):
                        out, states, log, log_cap):
         """The fixed-step loop of ``method`` (verlet exactly as ``Verlet._step``, rk4 as
         ``RK4._step``) through the communication points ``times`` in one compiled call, with
-        the outputs at every point (kernels.multibody_loops.points_loop). Inputs inside a communication step: a cubic Hermite through its ends' angle and
-        speed (exact for held inputs and the scene ramps)."""
+        the outputs at every point (kernels.multibody_loops.points_loop). Inputs inside a
+        communication step: a cubic Hermite through its ends' angle and speed (exact for held
+        inputs and the scene ramps)."""
         if not self.has_loop_kernel(method):
             return None
         res = run_points(0 if method == "verlet" else 1, x_in, x_out, times, angle,
