@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "enabled"]
+__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "enabled",
+           "quiet_when_plain"]
 
 
 def numba_requested() -> bool:
@@ -76,3 +77,23 @@ def jit_noalloc(fn):
         return njit(fn, fastmath=False, _nrt=False)
     fn.py_func = fn
     return fn
+
+
+def quiet_when_plain(fn):
+    """For a Python function that calls kernels: returned as it is when the kernels are
+    compiled. Run as plain Python, the kernels' arithmetic on array elements is numpy's, which
+    warns (RuntimeWarning) on the overflow and nan of a diverging state where the compiled code
+    computes the same inf and nan silently and the callers' checks report the divergence
+    (SimulationDiverged); the plain call is made under ``np.errstate(all="ignore")`` so both
+    paths say the same."""
+    if _ENABLED:
+        return fn
+    import functools
+
+    import numpy as np
+
+    @functools.wraps(fn)
+    def quiet(*args, **kwargs):
+        with np.errstate(all="ignore"):
+            return fn(*args, **kwargs)
+    return quiet

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .._numba import jit_noalloc
+from .._numba import jit_noalloc, quiet_when_plain
 from .multibody_layout import (I_C, I_C2, I_CC, I_CG1, I_CG2, I_CJ, I_CR, I_CX, I_CY, I_DR, I_GAP,
                                I_GX, I_GY, I_I1, I_I2, I_K, I_KC, I_KR, I_L0, I_LMAX, I_LMIN, I_M,
                                I_ONSET, I_PAPER_CONTACT, I_PAPER_DAMP, I_PH1, I_PH2, I_QF, I_R1,
@@ -398,6 +398,7 @@ def omega_bound(q, P, OM):
     return w
 
 
+@quiet_when_plain
 def accel(q, v, tau, tau_d, tau_dd, load, P, ws: Workspace, out=None):
     """Compiled kernel: accelerations (new array unless ``out``) and (status, shaft torque);
     diagnostics land in ``ws``."""

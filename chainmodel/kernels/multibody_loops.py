@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from .._numba import jit, jit_noalloc
+from .._numba import jit, jit_noalloc, quiet_when_plain
 from .multibody_layout import (CF_LIMIT, CF_MAX, CF_STAB, CF_STEP, CF_THETA, I_RIGID, Workspace)
 from .multibody_forces import accelerations, forces_pass, geometry_pass, omega_bound
 from .multibody_outputs import outputs_row
@@ -242,6 +242,7 @@ def held_loop(method, x_in, x_out, t0, t1, a0, w0, accel, ld, P, OM, cfg, acc1, 
                        tooth_ratio, spans, OUT, states)
 
 
+@quiet_when_plain
 def run_fixed(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
               ws: Workspace) -> int:
     k1, k2, k3, k4 = ws.k
@@ -251,6 +252,7 @@ def run_fixed(method: int, x, t0, h, nsteps, T0, H, a0, w0, a1, w1, L0, L1, P,
                            ws.side, ws.dist, ws.seat_angle, ws.scr, False))
 
 
+@quiet_when_plain
 def run_points(method: int, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg,
                ws: Workspace, mids, tol, tooth_ratio, spans, OUT, states):
     k1, k2, k3, k4 = ws.k
@@ -260,6 +262,7 @@ def run_points(method: int, x_in, x_out, times, angle, speed, acc, load, P, OM, 
                        states)
 
 
+@quiet_when_plain
 def run_held(method: int, x_in, x_out, t0, t1, a0, w0, acc, load, P, OM, cfg,
              ws: Workspace, mids, tol, tooth_ratio, spans, OUT):
     k1, k2, k3, k4 = ws.k

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .._numba import jit_noalloc
+from .._numba import jit_noalloc, quiet_when_plain
 from ..outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
                        O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
                        O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
@@ -166,6 +166,7 @@ def outputs_row(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, 
     return status
 
 
+@quiet_when_plain
 def fill_outputs(x, tau, tau_d, tau_dd, load, P, ws: Workspace, mids, tol, reverse,
                  tooth_ratio, spans, out):
     return int(outputs_row(x, float(tau), float(tau_d), float(tau_dd), float(load), P, ws.acc,
