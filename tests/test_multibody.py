@@ -313,7 +313,6 @@ def test_kernels_match_the_numpy_oracle(extra):
     independent vectorised force law and outputs of tests/multibody_oracle.py."""
     scene = load_scene("xu2010", fidelity=3).with_overrides(parameters=extra)
     model, xs = _states(scene)
-    n = 2 + 2 * model.M
     for t, x in xs:
         u = scene.inputs(t)
         r1, o1 = model.rhs(t, x, u), model.outputs(t, x, u)

@@ -23,14 +23,10 @@ PARAM_FIELDS = (
     "paper_damping", "q_forces", "rigid_shaft", "l_min", "l_max", "z1", "z2", "reach1",
     "reach2", "cj", "gap", "onset",
 )
-
-
 (I_M, I_K, I_C, I_L0, I_KC, I_CC, I_DR, I_GX, I_GY, I_I1, I_I2, I_KR, I_CR, I_C2,
  I_CX, I_CY, I_R1, I_R2, I_PH1, I_PH2, I_TA1, I_TA2, I_SG1, I_CG1, I_SG2, I_CG2, I_TIP1, I_TIP2,
  I_PAPER_CONTACT, I_PAPER_DAMP, I_QF, I_RIGID, I_LMIN, I_LMAX, I_Z1, I_Z2, I_REACH1,
  I_REACH2, I_CJ, I_GAP, I_ONSET) = range(len(PARAM_FIELDS))
-
-
 #: P holds these scalars, then the tables cos(2 pi j / z1), sin(...) (j < z1), then the same
 #: for z2 (see :func:`pack_tables`): seat directions without trigonometry in the hot loop
 N_PARAMS = len(PARAM_FIELDS)
@@ -45,16 +41,12 @@ def pack_tables(P: np.ndarray) -> np.ndarray:
 
 
 #: rows of the scratch vector ``scr`` (each M long): the links' angular speed, then what the
-#: positions give and the velocities reuse (:func:`geometry_pass`): per link its direction,
+#: positions give and the velocities reuse (multibody_forces.geometry_pass): per link its direction,
 #: chord, length, spring force, damping coefficient and branch (1 stretched, -1 bearing, 0 in
 #: the play); per roller and sprocket the seat penetration (<= 0: no contact), contact normal,
 #: position relative to the sprocket centre and seat direction
 (R_OMEGA, R_EX, R_EY, R_DX, R_DY, R_L, R_TS, R_CL, R_BRANCH) = range(9)
-
-
 R_CONTACT = 9           # + 7 s + (0 pen, 1 nx, 2 ny, 3 rx, 4 ry, 5 st, 6 ct), s = 0 driver, 1 driven
-
-
 SCR_ROWS = R_CONTACT + 14
 
 
