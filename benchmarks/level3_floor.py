@@ -1,15 +1,15 @@
 """Level 3 (multibody) against a compiled C floor of the same model, timed in the same run
 (issue 20, item 6).
 
-The floor is benchmarks/multibody_floor.c: the force law of multibody_kernels._accel_loops and
-its velocity-Verlet loop (one force evaluation per step) in plain C, compiled here with gcc
+The floor is benchmarks/multibody_floor.c: the force law of
+kernels.multibody_forces.accelerations and its velocity-Verlet loop (one force evaluation per step) in plain C, compiled here with gcc
 (-O2 -march=native -fno-math-errno; no -ffast-math, as numba's kernels have none). For each
 chain length (46, 100, 144, 200 links: xu2010's sprockets, the centre distance set as
 benchmarks/multibody.py does) the script times, interleaved, best of --repeat:
 
 * "simulate()": the whole library call, 1 s of the scene at outputs every 1e-4 s (the default;
   ramp 0.05 s to 120 rpm, then steady running), after a warm-up;
-* "numba loop": the compiled Verlet loop alone (multibody_kernels.run_fixed_numba: the numbers
+* "numba loop": the compiled Verlet loop alone (kernels.multibody_loops.run_fixed: the numbers
   of two force evaluations per step - at each step's start and at its end with the half-step
   velocity - made of one position pass and two velocity passes), the same number of steps at
   the same mean step, from the library's state at 0.5 s, constant input speed;
@@ -42,7 +42,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 import chainmodel  # noqa: E402
-from chainmodel.models import multibody_kernels as K  # noqa: E402
+from chainmodel.kernels import multibody_layout as K  # noqa: E402
+from chainmodel.kernels.multibody_loops import run_fixed  # noqa: E402
 from chainmodel.scene import load_scene  # noqa: E402
 from chainmodel.simulation import run_scene  # noqa: E402
 from chainmodel.units import RPM  # noqa: E402
@@ -60,7 +61,7 @@ def scene_for(links: int, duration: float = 1.0):
 
 
 def build_floor(tmp: Path) -> ctypes.CDLL:
-    """Compile multibody_floor.c with the parameter indices of multibody_kernels (I_*)."""
+    """Compile multibody_floor.c with the parameter indices of kernels.multibody_layout (I_*)."""
     index = {name: getattr(K, name) for name in dir(K)
              if name.startswith("I_") and isinstance(getattr(K, name), int)}
     header = "".join(f"#define {name} {k}\n" for name, k in sorted(index.items()))
@@ -118,7 +119,7 @@ def main(argv=None) -> int:
             hermite = (0.5, 1.0, w_in * 0.5, w_in, w_in * 1.5, w_in, load, load)
 
             def numba_loop(x, m):
-                return K.run_fixed_numba(0, x, 0.5, h, m, *hermite, model.P, model.ws)
+                return run_fixed(0, x, 0.5, h, m, *hermite, model.P, model.ws)
 
             # the C loop with the library's scheme computes what the compiled loop does
             xa, xb = x0.copy(), x0.copy()

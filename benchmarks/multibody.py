@@ -73,7 +73,7 @@ def stepper_table(joint_damping=0.0, links_list=(46, 100, 200)):
     extra = {"chain.joint_damping": joint_damping}
     print()
     print(f"machine: {machine()}; python {platform.python_version()}; "
-          f"numba {'on' if chainmodel.models.multibody_kernels.numba_enabled() else 'off'}; "
+          f"numba {'on' if chainmodel._numba.enabled() else 'off'}; "
           f"chain.joint_damping = {joint_damping:g} N.m.s/rad")
     model = scene_for(**extra).model()
     x0 = model.initial_state(scene_for().inputs(0))
@@ -108,7 +108,7 @@ def stepper_table(joint_damping=0.0, links_list=(46, 100, 200)):
 def overhead():
     """Where the time goes: the compiled Verlet loop alone over 1 s, and full runs with outputs
     every 1e-4 s and 1e-3 s (CPU seconds per simulated second)."""
-    from chainmodel.models import multibody_kernels as K
+    from chainmodel.kernels.multibody_loops import run_fixed
     sc = scene_for()
     run_scene(sc.with_overrides(duration=0.01))  # warm the compiled code
     print()
@@ -123,7 +123,7 @@ def overhead():
     n = int(1.0 / h)
     w_in = 120 * 2 * math.pi / 60
     c0, w0 = time.process_time(), time.perf_counter()
-    K.run_fixed_numba(0, x, 0.0, h, n, 0.0, 1.0, 0.0, w_in, w_in, w_in, 43.2, 43.2, m.P, m.ws)
+    run_fixed(0, x, 0.0, h, n, 0.0, 1.0, 0.0, w_in, w_in, w_in, 43.2, 43.2, m.P, m.ws)
     print(f"| compiled Verlet loop alone ({n} steps, constant speed) | "
           f"{time.process_time() - c0:.2f} | {time.perf_counter() - w0:.2f} |")
 

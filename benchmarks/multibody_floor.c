@@ -1,8 +1,8 @@
 /* The compiled C floor of the level-3 (multibody) model: the force law of
- * chainmodel/models/multibody_kernels.py (_accel_loops) and its velocity-Verlet loop
- * (_run_fixed_loops, method 0), written in plain C, line for line, for
+ * chainmodel/kernels/multibody_forces.py (accelerations) and its velocity-Verlet loop
+ * (kernels/multibody_loops.py fixed_steps, method 0), written in plain C, line for line, for
  * benchmarks/level3_floor.py, which compiles it with gcc and times it against the
- * library in the same run. The parameter vector P has the layout of multibody_kernels
+ * library in the same run. The parameter vector P has the layout of kernels/multibody_layout.py
  * (PARAM_FIELDS, then the seat-direction tables); its indices come from floor_params.h, which
  * the benchmark writes from PARAM_FIELDS. Inputs: the input shaft turning at a constant speed
  * (angle w t, speed w, acceleration 0) against a constant load - the steady running of the

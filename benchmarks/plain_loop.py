@@ -1,6 +1,6 @@
-"""Cost of the fixed-step loop on the model interface (``FixedStepper.compiled = False``: the
-twin the tests compare, and level 3's path without numba), which since issue 20 item 1 runs
-rk4_loop's own functions as plain Python (chainmodel.plain_loop). Prints one row per scene:
+"""Cost of the fixed-step loop on the model interface (``integrate.python_loop_model``: the
+twin the tests compare), which since issue 20 item 1 runs rk4_loop's own functions as plain
+Python (chainmodel.kernels.plain_loop). Prints one row per scene:
 best wall time of ``simulate()`` over --repeat runs, the stepper's counts and the final driven
 angle (to compare two trees bitwise: run it with each on PYTHONPATH).
 
@@ -14,7 +14,7 @@ import os
 import time
 
 import chainmodel
-from chainmodel import integrate
+from chainmodel import integrate, simulation
 
 CASES = (("xu2010", 1, 0.05), ("C1", 2, 0.05), ("xu2010", 3, 0.005))
 
@@ -23,7 +23,6 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=2)
     args = ap.parse_args(argv)
-    integrate.FixedStepper.compiled = False
     print(f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}; best of {args.repeat}\n")
     print("| scene | level | duration [s] | wall [s] | steps | events | rhs evaluations | "
           "final driven.angle [rad] |")
@@ -34,7 +33,7 @@ def main(argv=None):
         best, r = float("inf"), None
         for _ in range(args.repeat):
             t = time.perf_counter()
-            r = chainmodel.simulate(sc)
+            r = simulation.run_scene(sc, model=integrate.python_loop_model(sc.model()))
             best = min(best, time.perf_counter() - t)
         print(f"| {name} | {level} | {duration:g} | {best:.3f} | {r.stats['steps']} | "
               f"{r.stats['events']} | {r.stats['rhs_evaluations']} | "

@@ -40,7 +40,7 @@ import numpy as np
 
 import chainmodel
 from chainmodel import integrate, simulation
-from chainmodel.models import spans
+from chainmodel import _numba
 
 INTERVALS = (1e-2, 1e-3)
 BATCHED = "batched" in inspect.signature(simulation.run_scene).parameters
@@ -50,18 +50,17 @@ def run(scene, method, step=0.0, rtol=1e-6, compiled=True, batched=True, repeat=
     """(result, best wall time of the whole call, best stepper time)."""
     sc = scene.with_overrides(solver_method=method, solver_step=step, solver_rtol=rtol)
     kw = {"batched": batched} if BATCHED else {}
-    old = integrate.FixedStepper.compiled
-    integrate.FixedStepper.compiled = compiled
-    try:
-        simulation.run_scene(sc.with_overrides(duration=2 * sc.output_interval), **kw)  # warm-up
-        best, best_stepper, r = np.inf, np.inf, None
-        for _ in range(repeat):
-            t = time.perf_counter()
-            r = simulation.run_scene(sc, **kw)
-            best = min(best, time.perf_counter() - t)
-            best_stepper = min(best_stepper, r.stats["wall_time"])
-    finally:
-        integrate.FixedStepper.compiled = old
+    # compiled=False: rk4_loop's loop as plain Python on Model.rhs (integrate.python_loop_model)
+    model = None if compiled else integrate.python_loop_model(sc.model())
+    warm = sc.with_overrides(duration=2 * sc.output_interval)
+    simulation.run_scene(warm, model=None if compiled else integrate.python_loop_model(warm.model()),
+                         **kw)  # warm-up
+    best, best_stepper, r = np.inf, np.inf, None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        r = simulation.run_scene(sc, model=model, **kw)
+        best = min(best, time.perf_counter() - t)
+        best_stepper = min(best_stepper, r.stats["wall_time"])
     return r, best, best_stepper
 
 
@@ -79,7 +78,7 @@ def errors(r, ref, duration):
 def targets(scenes, repeat):
     """Whole 1 s simulate() calls at the default output interval (issue 8's targets), wall and
     CPU time (the machine is shared: CPU time is what a dedicated core gives)."""
-    print(f"numba: {spans.NUMBA}; best of {repeat}; load average "
+    print(f"numba: {_numba.enabled()}; best of {repeat}; load average "
           f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
     print("| scene | level | x real time, wall | x real time, CPU | target | stepping [ms] | "
           "rest [ms] | internal steps | evaluations per point |")
@@ -120,7 +119,7 @@ def main(argv=None):
     if args.targets:
         return targets(args.scenes, args.repeat)
     dur = args.duration
-    print(f"numba: {spans.NUMBA}; duration {dur} s; best of {args.repeat}; batched path: "
+    print(f"numba: {_numba.enabled()}; duration {dur} s; best of {args.repeat}; batched path: "
           f"{BATCHED}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     head = ("| scene | level | stepper | " + " | ".join(
         f"{iv * 1e3:g} ms: x real time | stepper | max dphi2 [rad] | rms dT [N]"
@@ -153,7 +152,7 @@ def main(argv=None):
                     todo += [("rk45 rtol 1e-6", "rk45", 0.0, True, True),
                              ("dop853 rtol 1e-8", "dop853", 0.0, True, True)]
                 for label, method, step, compiled, batched in todo:
-                    if compiled and method == "rk4" and not spans.NUMBA:
+                    if compiled and method == "rk4" and not _numba.enabled():
                         label = label.replace("compiled", "numpy")
                     try:
                         r, wall, stepper = run(scene, method, step,

@@ -1,4 +1,4 @@
-"""Cost of one level 1-2 kernel evaluation (chainmodel.models.spans.evaluate) on states of a
+"""Cost of one level 1-2 kernel evaluation (chainmodel.kernels.spans.evaluate) on states of a
 real run: C1 and xu2010, levels 1 and 2, 0.3 s of each scene from rest sampled every tenth
 output point (300 states with their inputs), each evaluated 20 times in a compiled loop; best of
 --repeat. The whole-call figures are benchmarks/reduced.py --targets'; this isolates the
@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 import chainmodel
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 
 
 @numba.njit

@@ -2,11 +2,11 @@
 
 numba is a core dependency. Every compiled kernel has a plain numpy/Python twin that computes
 the same thing (tests compare them); ``CHAINMODEL_NUMBA=0`` (or false/no/off) in the
-environment selects the plain paths even where numba is installed. That is the one switch:
-:data:`ENABLED` is its value when the kernels were decorated (at import: compiled or plain),
-:func:`enabled` its value now (the models ask it before dispatching to a compiled loop, so a
-process that switches it off after import runs the plain loops); ``spans.NUMBA`` and
-``multibody_kernels.HAVE_NUMBA`` / ``numba_enabled()`` are their old names.
+environment selects the plain paths even where numba is installed. That is the one switch,
+read once when this module is imported (the kernels are decorated then: compiled or plain) and
+reported by :func:`enabled`; no model, stepper or kernel module has a switch of its own. The
+plain twin of a compiled kernel is its ``py_func`` (the same source run as Python), and the
+pairs are listed once, in :data:`chainmodel.kernels.TWINS`.
 
 Kernels are compiled with :func:`njit` (never ``numba.njit(cache=True)``): it attaches the
 per-machine cache of :mod:`chainmodel.numba_cache`, which survives the FMU's fresh extraction
@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "ENABLED", "enabled"]
+__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "enabled",
+           "quiet_when_plain"]
 
 
 def numba_requested() -> bool:
@@ -36,15 +37,15 @@ def import_numba():
     return numba
 
 
-#: the switch at import: numba importable and not switched off by CHAINMODEL_NUMBA (the
-#: kernels below are compiled when it is True)
-ENABLED: bool = import_numba() is not None
+#: the switch, read at import: numba importable and not switched off by CHAINMODEL_NUMBA
+_ENABLED: bool = import_numba() is not None
 
 
 def enabled() -> bool:
-    """The switch now: the kernels are compiled (:data:`ENABLED`) and CHAINMODEL_NUMBA does
-    not switch them off."""
-    return ENABLED and numba_requested()
+    """The one numba switch: True when the kernels of this process are compiled (numba
+    importable and CHAINMODEL_NUMBA not 0/false/no/off when chainmodel was imported), False
+    when they run as their plain Python source."""
+    return _ENABLED
 
 
 def njit(fn=None, **options):
@@ -56,9 +57,9 @@ def njit(fn=None, **options):
 
 
 def jit(fn):
-    """The kernel decorator: compiled (:func:`njit`) when :data:`ENABLED`, else the function
+    """The kernel decorator: compiled (:func:`njit`) when :func:`enabled`, else the function
     itself; either way the plain function is at ``.py_func`` (the twin tests call)."""
-    if ENABLED:
+    if _ENABLED:
         return njit(fn, fastmath=False)
     fn.py_func = fn
     return fn
@@ -72,7 +73,27 @@ def jit_noalloc(fn):
     kernels pass the same arrays and row views down many calls per evaluation, its atomic
     increments and decrements took half the time (docs/performance.md, issue 20 third pass).
     The arithmetic is the same: results are bitwise those of :func:`jit`."""
-    if ENABLED:
+    if _ENABLED:
         return njit(fn, fastmath=False, _nrt=False)
     fn.py_func = fn
     return fn
+
+
+def quiet_when_plain(fn):
+    """For a Python function that calls kernels: returned as it is when the kernels are
+    compiled. Run as plain Python, the kernels' arithmetic on array elements is numpy's, which
+    warns (RuntimeWarning) on the overflow and nan of a diverging state where the compiled code
+    computes the same inf and nan silently and the callers' checks report the divergence
+    (SimulationDiverged); the plain call is made under ``np.errstate(all="ignore")`` so both
+    paths say the same."""
+    if _ENABLED:
+        return fn
+    import functools
+
+    import numpy as np
+
+    @functools.wraps(fn)
+    def quiet(*args, **kwargs):
+        with np.errstate(all="ignore"):
+            return fn(*args, **kwargs)
+    return quiet

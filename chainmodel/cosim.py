@@ -282,7 +282,7 @@ class CosimSession:
         acceleration: the drive's inertia torque I_eff(angle) a, and with it the feedthrough
         I_eff / h of the speed input through the backward difference, left to the motor model.
         At levels 1-3 with the shaft spring the acceleration does not enter that torque."""
-        from .models.outputs import O_INPUT_SHAFT_TORQUE
+        from .outputs import O_INPUT_SHAFT_TORQUE
         row = row.copy()
         row[O_INPUT_SHAFT_TORQUE] = self.stepper.outputs_held(angle, speed, 0.0, torque)[
             O_INPUT_SHAFT_TORQUE]

@@ -32,12 +32,12 @@ one and committed on success).
 
 Levels 1-3 run the fixed-step loops of their kernels, a communication step with its outputs in
 one call (:meth:`FixedStepper.advance_held`, the FMU's path; :meth:`FixedStepper.advance_points`
-for many points, ``simulate()``'s path): compiled with numba, and for levels 1-2 the same source
-as plain Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._numba`; level 3
-then runs the loop below on its numpy force law). :meth:`FixedStepper._integrate` runs the same
-loop - rk4_loop's own functions, as plain Python (:mod:`chainmodel.plain_loop`) - on
-:meth:`Model.rhs`, for any model without kernels and, with ``FixedStepper.compiled = False``,
-as the twin the tests compare with: the step rule and the crossing are written once.
+for many points, ``simulate()``'s path): compiled with numba, and the same source as plain
+Python when ``CHAINMODEL_NUMBA=0`` (the one switch, :mod:`chainmodel._numba`).
+:meth:`FixedStepper._integrate` runs the same loop - rk4_loop's own functions, as plain Python
+(:mod:`chainmodel.kernels.plain_loop`) - on :meth:`Model.rhs`, for any model without kernels
+and for :func:`python_loop_model` (the twin the tests and benchmarks compare with): the step
+rule and the crossing are written once.
 Everything asked of a model is declared in :class:`~chainmodel.models.base.Model`
 (docs/architecture.md).
 """
@@ -55,15 +55,15 @@ import numpy as np
 
 from .models.base import Inputs, Model, SimulationDiverged
 # the loops' status codes, defined once in the loop of levels 1-2 (1 diverged, 2 explicit step
-# above the stable limit, 3 the model's range left, 4 non-finite outputs; multibody_kernels
-# uses the same numbers)
-from .models.outputs import OUTPUT_NAMES
-from .models.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
-from .plain_loop import run_interval
+# above the stable limit, 3 the model's range left, 4 non-finite outputs; level 3's loops
+# (kernels.multibody_loops) use the same numbers)
+from .outputs import OUTPUT_NAMES
+from .kernels.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
+from .kernels.plain_loop import run_interval
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
            "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",
-           "OUTPUT_NAMES", "DEFAULT_TOLERANCE"]
+           "OUTPUT_NAMES", "DEFAULT_TOLERANCE", "python_loop_model"]
 
 InputSource = Union[Inputs, Callable[[float], Inputs]]
 
@@ -395,21 +395,18 @@ class FixedStepper(Stepper):
                 f"frequency {omega / (2 * math.pi):.6g} Hz); use a step <= {limit:.6g} s or 0 "
                 "for automatic")
 
-    #: let a model whose kernels hold the loop (``advance_held`` / ``advance_points``,
-    #: :meth:`Model.has_loop_kernel`: levels 1-2 always - compiled with numba, their plain
-    #: source without - and level 3 with numba) do the stepping; False forces rk4_loop's loop
-    #: on Model.rhs in this process (how the tests and benchmarks/reduced.py run that twin
-    #: beside the kernels' loop)
-    compiled: bool = True
-
     def _has_compiled(self) -> bool:
+        """The model's kernels hold the loop of this method (``advance_held`` /
+        ``advance_points``, :meth:`Model.has_loop_kernel`: levels 1-3, compiled with numba and
+        their plain source without); otherwise rk4_loop's loop runs on Model.rhs
+        (:func:`python_loop_model` asks for that)."""
         can = self.__dict__.get("_can_compile")
         if can is None:     # what the model offers for this method (fixed once built)
             model = self.model
             can = self._can_compile = (model.n_states > 0
                                        and self.method in model.compiled_methods
                                        and model.has_loop_kernel(self.method))
-        return self.compiled and can
+        return can
 
     # --- compiled paths ---------------------------------------------------------------------
     def _advance_held(self, t_end, angle, speed, acceleration, torque):
@@ -517,10 +514,10 @@ class FixedStepper(Stepper):
                                  f"(non-finite state); try a smaller solver.step or "
                                  "solver.tolerance")
 
-    # --- the loop on the model interface (rk4_loop's source; chainmodel.plain_loop) ----------
+    # --- the loop on the model interface (rk4_loop's source; chainmodel.kernels.plain_loop) ----------
     def _integrate(self, t0, t1, source):
         """The step rule of the module docstring over [t0, t1] on the model interface:
-        rk4_loop's own loop run as plain Python (:mod:`chainmodel.plain_loop`), on a copy of
+        rk4_loop's own loop run as plain Python (:mod:`chainmodel.kernels.plain_loop`), on a copy of
         the state so that a failure leaves the stepper where it was."""
         model = self.model
         x = self.x.copy()
@@ -693,3 +690,24 @@ def make_stepper(model: Model, method: str = "auto", t0: float = 0.0, inputs: In
         return Adaptive(model, t0, x0, inputs, method=method, rtol=rtol, max_step=max_step,
                         **options)
     raise ValueError(f"unknown solver method {method!r}; choose auto or one of {', '.join(METHODS)}")
+
+
+_PYTHON_LOOP_CLASSES: dict = {}
+
+
+def python_loop_model(model: Model) -> Model:
+    """A copy of ``model`` (its arrays shared) that offers no loop kernel
+    (:meth:`Model.has_loop_kernel` False), so the fixed steppers run rk4_loop's loop as plain
+    Python on its :meth:`Model.rhs` (:mod:`chainmodel.kernels.plain_loop`): the twin of the
+    kernels' loop that the tests and benchmarks/reduced.py run beside it in one process. Not a
+    switch: the model it is given and every other model keep their kernels' loop."""
+    import copy
+    cls = type(model)
+    sub = _PYTHON_LOOP_CLASSES.get(cls)
+    if sub is None:
+        sub = _PYTHON_LOOP_CLASSES[cls] = type(
+            f"{cls.__name__}OnPythonLoop", (cls,),
+            {"has_loop_kernel": lambda self, method: False, "__module__": cls.__module__})
+    twin = copy.copy(model)
+    twin.__class__ = sub
+    return twin

@@ -12,7 +12,7 @@ Where
     ``$CHAINMODEL_CACHE_DIR/numba`` if that variable is set, else the per-user cache folder
     (Linux ``$XDG_CACHE_HOME`` or ``~/.cache``, macOS ``~/Library/Caches``, Windows
     ``%LOCALAPPDATA%``) ``/chaindrive/numba``; one subfolder per module, named by the module's
-    full name (``chainmodel.models.spans``, or ``_chaindrive_<build id>.models.spans`` inside
+    full name (``chainmodel.kernels.spans``, or ``_chaindrive_<build id>.kernels.spans`` inside
     a build of the FMU), so the library and every FMU build have their own entries but every
     extraction of one FMU build shares them.
 Key

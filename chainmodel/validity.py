@@ -22,7 +22,7 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   matches the lower). No check for a pitch ISO 606 does not list.
 * **penetration** (level 3): the roller-seat contact is a penalty law,
   F_n = max(0, k_c delta + c_c d(delta)/dt) with delta the overlap beyond the seat clearance
-  (``multibody_kernels._accel_loops``), so the elastic penetration is delta = F_n / k_c
+  (``kernels.multibody_forces.accelerations``), so the elastic penetration is delta = F_n / k_c
   (``contact.max_force`` / ``contact.stiffness``; the damper's share is left in). Warning beyond
   the largest seat clearance ISO 606 allows for the roller, r_i,max - d1/2 =
   0.005 d1 + 0.069 d1^(1/3) mm (or the model's own R_t - R_r if larger): the roller then sits

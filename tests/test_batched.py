@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel import simulation
+from chainmodel import _numba, simulation
 from chainmodel.models import Inputs, SimulationDiverged
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 from chainmodel.scene import OperatingPoint
 
-needs_numba = pytest.mark.skipif(not S.NUMBA, reason="the batched path is the compiled one")
+needs_numba = pytest.mark.skipif(not _numba.enabled(), reason="the batched path is the compiled one")
 
 
 def _same(a, b):

@@ -191,7 +191,7 @@ def test_without_drive_inertia_the_torque_ignores_the_acceleration_estimate(leve
     backward-difference acceleration (here changed through the speed at the last point), every other
     output unchanged; with it, the torque changes linearly in that acceleration (level 0 and the
     rigid shaft; at level 1 with the spring it does not enter the torque at all)."""
-    from chainmodel.models.outputs import O_INPUT_SHAFT_TORQUE
+    from chainmodel.outputs import O_INPUT_SHAFT_TORQUE
     params = P.validate({"fidelity": level, "input_shaft.rigid": rigid})
     rows = {}
     for include in (True, False):

@@ -49,7 +49,7 @@ def check_plausible(r, ratio_tol: float, undamped: bool = False) -> None:
     tight, slack = r["tight_span.tension"], r["slack_span.tension"]
     c = rho_v2(sc, r["driver.speed"])
     assert np.all(slack >= c * (1 - 1e-12) - 1e-9), "a span below the centrifugal tension"
-    # span roles follow the power flow (models/span_roles.py), not the momentary size: in a
+    # span roles follow the power flow (kernels/span_roles.py), not the momentary size: in a
     # transient the tight span may carry less than the slack one for a while
     assert np.all(tight >= c * (1 - 1e-12) - 1e-9), "a span below the centrifugal tension"
     mask = steady_window(r.time, sc.operating.ramp_time, r.time[-1])
@@ -363,7 +363,7 @@ def test_item7_pretension_means_the_same_static_tension_at_levels_0_2_and_3():
 def test_item8_reverse_rotation_labels_the_tight_span_true(level):
     """-120 rpm with +43.2 N.m: the load now assists the motion (overrunning) and the upper
     span carries it; with -43.2 N.m it resists and the lower span (the one the driver winds on
-    backwards) does. Either way tight_span is that physical span (models/span_roles.py), and
+    backwards) does. Either way tight_span is that physical span (kernels/span_roles.py), and
     its length is that span's. (Was: slack 1110 N labelled tight 104 N.)"""
     for load in (43.2, -43.2):
         r = chainmodel.simulate("xu2010", fidelity=level, input_speed_rpm=-120, load_torque=load,

@@ -22,7 +22,7 @@ import chainmodel
 from chainmodel.analysis.summary import tooth_ratio
 from chainmodel.integrate import Verlet
 from chainmodel.models import SimulationDiverged
-from chainmodel.models import multibody_kernels as K
+from chainmodel.kernels import multibody_forces as K
 from chainmodel.models.base import Inputs
 from chainmodel.scene import load_scene
 

@@ -1,4 +1,5 @@
-"""The package's import graph has no cycles (issue 20, item 5), counting deferred imports
+"""The package's import graph has no cycles (issue 20, item 5) and the kernels sit below
+everything else (item 2), counting deferred imports
 (inside functions) and by-name imports (a module's dotted name written as a string, e.g. the
 CLI's SUBCOMMANDS), and no module edits sys.path. Imports under ``if TYPE_CHECKING:`` are not
 executed and are not counted. A module importing ``pkg.sub`` counts as depending on ``pkg.sub``
@@ -106,3 +107,40 @@ def test_no_sys_path_edits_in_chainmodel():
     edits = [str(p.relative_to(PACKAGE.parent)) for p in PACKAGE.rglob("*.py")
              if "sys.path.insert" in p.read_text() or "sys.path.append" in p.read_text()]
     assert edits == []
+
+
+#: what the kernels (chainmodel.kernels) must never import, directly or through another module
+KERNEL_FORBIDDEN = ("chainmodel.models", "chainmodel.scene", "chainmodel.cli", "chainmodel.fmu",
+                    "chainmodel.analysis", "chainmodel.integrate", "chainmodel.simulation",
+                    "chainmodel.cosim")
+
+
+def test_kernels_import_nothing_above_them():
+    """Layers run one way (docs/architecture.md): the kernel package imports only the base
+    modules and the kinematics, never the models, steppers, scenes, CLI, FMU or analysis tools -
+    counting the modules those import in turn."""
+    mods = _modules()
+    graph = {name: _imports(name, path, mods) for name, path in mods.items()}
+    kernel_modules = [m for m in mods if m == "chainmodel.kernels" or
+                      m.startswith("chainmodel.kernels.")]
+    assert len(kernel_modules) > 5, "the kernel package was not found"
+    for start in kernel_modules:
+        bad = _forbidden(graph, start)
+        assert bad == [], f"{start} imports {bad}"
+
+
+def _forbidden(graph: dict[str, set[str]], start: str) -> list[str]:
+    """The KERNEL_FORBIDDEN modules that ``start`` reaches in ``graph``."""
+    seen, todo = set(), [start]
+    while todo:
+        for dep in graph.get(todo.pop(), set()) - seen:
+            seen.add(dep)
+            todo.append(dep)
+    return sorted(d for d in seen if d.startswith(KERNEL_FORBIDDEN))
+
+
+def test_the_layer_check_finds_a_forbidden_import():
+    graph = {"chainmodel.kernels.a": {"chainmodel.geometry"},
+             "chainmodel.geometry": {"chainmodel.models.base"}}
+    assert _forbidden(graph, "chainmodel.kernels.a") == ["chainmodel.models.base"]
+    assert _forbidden({"chainmodel.kernels.a": {"chainmodel.units"}}, "chainmodel.kernels.a") == []

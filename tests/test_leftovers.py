@@ -24,8 +24,8 @@ def run_suite(tmp_path: Path, test_source: str, **env) -> subprocess.CompletedPr
     shutil.copy2(ROOT / "chainmodel" / "numba_cache.py", tmp_path / "chainmodel")
     (tmp_path / "tests" / "test_mini.py").write_text(test_source)
     home = tmp_path / "home"
-    (home / ".cache" / "chaindrive" / "numba" / "chainmodel.models.spans").mkdir(parents=True)
-    (home / ".cache" / "chaindrive" / "numba" / "chainmodel.models.spans" / "k.nbi").write_text("x")
+    (home / ".cache" / "chaindrive" / "numba" / "chainmodel.kernels.spans").mkdir(parents=True)
+    (home / ".cache" / "chaindrive" / "numba" / "chainmodel.kernels.spans" / "k.nbi").write_text("x")
     clean = {k: v for k, v in os.environ.items()
              if k not in ("CHAINMODEL_CACHE_DIR", "MPLCONFIGDIR", "XDG_CACHE_HOME",
                           "XDG_CONFIG_HOME", "CHAINMODEL_TEST_LEFTOVERS", "PYTEST_ADDOPTS")}
@@ -42,7 +42,7 @@ def test_uses_the_session_folder():
     folder = Path(os.environ["CHAINMODEL_CACHE_DIR"])
     assert folder.name.startswith("chaindrive-tests-")
     # the user's compiled kernels were copied in, so nothing is compiled twice
-    assert (folder / "numba" / "chainmodel.models.spans" / "k.nbi").read_text() == "x"
+    assert (folder / "numba" / "chainmodel.kernels.spans" / "k.nbi").read_text() == "x"
     (folder / "numba" / "new.nbi").write_text("compiled in the session")
     Path(os.environ["MPLCONFIGDIR"], "fontlist.json").write_text("{}")
     Path("session.txt").write_text(str(folder))     # (the miniature's cwd is no repository)

@@ -293,7 +293,7 @@ def test_static_tension_c1_within_table1_bounds():
     assert T0 == pytest.approx(mean, rel=0.05)
 
 
-# --- the scalar compiled evaluation (models/kinematic_kernel.py) --------------------------------
+# --- the scalar compiled evaluation (kernels/kinematic.py) --------------------------------
 
 @pytest.mark.parametrize("name", ["xu2010", "C1", "coarse", "fine"])
 def test_scalar_kernel_equals_the_vectorised_library(name):
@@ -301,7 +301,7 @@ def test_scalar_kernel_equals_the_vectorised_library(name):
     the vectorised KinematicModel.evaluate's outputs to 1e-12 at many random angles, speeds of
     both signs (forward and reverse branches), accelerations and loads."""
     from chainmodel.models import ALL_OUTPUTS
-    from chainmodel.models.kinematic_kernel import level0_outputs
+    from chainmodel.kernels.kinematic import level0_outputs
     m = chainmodel.Scene.from_preset(name, fidelity=0).model()
     rng = np.random.default_rng(7)
     n = 400
@@ -324,10 +324,10 @@ def test_scalar_kernel_equals_the_vectorised_library(name):
 
 
 def test_scalar_rotation_equals_driven_rotation_over_many_periods():
-    """kinematic_kernel.driven_rotation against kinematics.driven_rotation, forward and reverse,
+    """kernels.kinematic.driven_rotation against kinematics.driven_rotation, forward and reverse,
     on a fine grid over several tooth periods (seating and release inside) and at the event
     angles themselves."""
-    from chainmodel.models.kinematic_kernel import driven_rotation, fourbar_constants
+    from chainmodel.kernels.kinematic import driven_rotation, fourbar_constants
     drive = chainmodel.Scene.from_preset("xu2010").drive
     Kc = fourbar_constants(drive)
     period = 2 * math.pi / drive.n_driver

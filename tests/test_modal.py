@@ -13,7 +13,7 @@ import chainmodel
 from chainmodel.kinematics import chain_geometry
 from chainmodel.kinematics import driven_rotation
 from chainmodel.models import MODEL_CLASSES, Inputs
-from chainmodel.models import spans as S
+from chainmodel.kernels import spans as S
 from chainmodel.models.modal import ModalModel, galerkin_coefficients
 from chainmodel.presets import reference_values
 

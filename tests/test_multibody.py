@@ -1,5 +1,6 @@
 """Level 3 (multibody, seed 003): tooth ratio, seats never skipped, force balance, meshing
-spectrum, quasi-static limit, energy, bad input, numba vs numpy, stable step, Jacobian pattern.
+spectrum, quasi-static limit, energy, bad input, kernels vs the numpy oracle, stable step,
+Jacobian pattern.
 
 Reference numbers come from seed 003 section 7 (25/17 teeth, 46 links, 120 rpm, 43.2 N.m: the
 meshing frequency z1 n / 60 = 50 Hz), from physics (torque balances, energy conservation) or
@@ -20,11 +21,12 @@ from chainmodel.analysis.summary import dominant_frequency, tooth_ratio
 from chainmodel.integrate import RK4, Verlet
 from chainmodel.kinematics.wrapping import chain_geometry
 from chainmodel.models import SimulationDiverged, model_class
-from chainmodel.models import multibody_kernels as K
 from chainmodel.models.base import ALL_OUTPUTS, Inputs
 from chainmodel.models.kinematic import KinematicModel
 from chainmodel.models.multibody import MultibodyModel
 from chainmodel.scene import load_scene
+
+import multibody_oracle as oracle
 
 RPM = 2 * math.pi / 60
 STEADY_FROM = 0.3  # s: after the 0.05 s ramp and the start-up transient of the xu2010 scene
@@ -270,10 +272,12 @@ def test_bad_input_is_refused_with_the_cause(override, words):
         chainmodel.simulate("xu2010", fidelity="multibody", duration=1e-3, **override)
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_diverging_run_raises_not_nan(monkeypatch):
     """A step far above the stable limit (slipped past the check and the stable-step guard by
     pretending the highest frequency is 1000 rad/s) blows up; the stepper raises
-    SimulationDiverged instead of returning NaN."""
+    SimulationDiverged instead of returning NaN - and says nothing else on the way (no numpy
+    RuntimeWarning from the kernels' plain twins under CHAINMODEL_NUMBA=0)."""
     scene = load_scene("xu2010", fidelity=3, duration=0.01)
     model = scene.model()
     monkeypatch.setattr(model, "omega_at", lambda t, x, u: 1e3)
@@ -304,43 +308,40 @@ def _states(scene, t_end=0.02):
                                         "contact.seating_angle": math.pi,
                                         "multibody.rotating_frame_forces": True,
                                         "drive.inclination": 0.3}])
-def test_numpy_path_matches_numba(extra, monkeypatch):
-    if not K.HAVE_NUMBA:
-        pytest.skip("numba not installed: only the numpy path exists")
+def test_kernels_match_the_numpy_oracle(extra):
+    """The kernels (compiled, or their plain twins under CHAINMODEL_NUMBA=0) against the
+    independent vectorised force law and outputs of tests/multibody_oracle.py."""
     scene = load_scene("xu2010", fidelity=3).with_overrides(parameters=extra)
     model, xs = _states(scene)
     for t, x in xs:
         u = scene.inputs(t)
-        model.use_numba = True
         r1, o1 = model.rhs(t, x, u), model.outputs(t, x, u)
         s1 = {k: np.array(v) for k, v in model.snapshot(t, x, u).items()}
-        model.use_numba = False
-        r2, o2 = model.rhs(t, x, u), model.outputs(t, x, u)
-        s2 = model.snapshot(t, x, u)
+        spans1 = model._evaluate(t, x, u)[3:]
+        r2, o2 = oracle.OracleModel.rhs(model, t, x, u), oracle.outputs_numpy(model, t, x, u)
+        spans2 = oracle._evaluate(model, t, x, u)[3:]
+        engaged2 = model._engaged(x)      # on the oracle's seat search, left in model.ws
         # round-off of positions (1e-17 m) times k_c / m (5e8 1/s^2) is the floor
         assert np.max(np.abs(r1 - r2)) < 1e-10 * np.max(np.abs(r1))
         for k in o1:
             assert o1[k] == pytest.approx(o2[k], rel=1e-9, abs=1e-9), k
-        for k in ("contact_sprocket", "engaged_driver", "engaged_driven", "tight_span_rollers"):
-            assert np.array_equal(s1[k], s2[k]), k
-    # the environment switch selects the numpy path
-    monkeypatch.setenv("CHAINMODEL_NUMBA", "0")
-    assert not K.numba_enabled()
-    assert not scene.model().use_numba
+        assert np.array_equal(s1["contact_sprocket"], model.ws.side)
+        assert np.array_equal(s1["engaged_driver"], engaged2[0])
+        assert np.array_equal(s1["engaged_driven"], engaged2[1])
+        assert spans1 == spans2
 
 
 def test_compiled_and_python_steppers_agree():
-    """The compiled Verlet loop (advance_compiled) and integrate.Verlet with the numpy rhs give
-    the same trajectory over 3 ms of the start (ramp inputs: the Hermite interpolation inside
-    the compiled loop is exact for them)."""
-    if not K.HAVE_NUMBA:
-        pytest.skip("numba not installed")
+    """The kernels' Verlet loop (advance_points) and integrate.Verlet's own loop on the numpy
+    oracle's right-hand side give the same trajectory over 3 ms of the start (ramp inputs: the
+    Hermite interpolation inside the kernels' loop is exact for them)."""
     scene = load_scene("xu2010", fidelity=3)
-    fast, slow = scene.model(), scene.model()
-    slow.use_numba = False
+    fast = scene.model()
+    slow = oracle.OracleModel(fast.drive, fast.params)
     a, b = Verlet(fast, 0.0, None, scene.inputs(0.0)), Verlet(slow, 0.0, None, scene.inputs(0.0))
     for t in (1e-3, 2e-3, 3e-3):
         oa, ob = a.advance(t, scene.inputs), b.advance(t, scene.inputs)
+    assert a.stats["steps"] > 0 and b.stats["steps"] > 0
     assert np.max(np.abs(a.x - b.x)) < 1e-9 * max(1.0, np.max(np.abs(a.x)))
     assert oa["tight_span.tension"] == pytest.approx(ob["tight_span.tension"], rel=1e-6)
 

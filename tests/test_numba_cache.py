@@ -135,7 +135,7 @@ def test_numba_global_configuration_is_untouched(tmp_path):
         from numba.core import caching, config
         before = ([c.__name__ for c in caching.CacheImpl._locator_classes], config.CACHE_DIR)
         import chainmodel
-        from chainmodel.models import spans
+        from chainmodel.kernels import spans
         from chainmodel.numba_cache import cached_njit
         f = cached_njit(lambda x: x + 1)
         f(1)

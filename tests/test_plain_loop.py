@@ -1,5 +1,5 @@
 """Issue 20, item 1: the fixed-step loop is written once. The loop on the model interface
-(chainmodel.plain_loop: models without kernels, level 3 without numba, the compiled=False twin)
+(chainmodel.kernels.plain_loop: models without kernels, integrate.python_loop_model's twin)
 runs rk4_loop's own functions - the same code objects - with only the names that touch the
 model rebound; integrate.py keeps no copy of the step rule or the event crossing."""
 
@@ -7,8 +7,9 @@ from __future__ import annotations
 
 import pytest
 
-from chainmodel import integrate, plain_loop
-from chainmodel.models import rk4_loop
+from chainmodel import integrate
+from chainmodel.kernels import plain_loop
+from chainmodel.kernels import rk4_loop
 
 SHARED = ("_interval", "_cross", "_locate", "_secant", "_dense", "_changed", "_step_bound",
           "_rk4_from", "_verlet_from")

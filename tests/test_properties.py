@@ -195,7 +195,7 @@ def test_short_runs_are_finite_and_never_push(level):
         v = sc.drive.n_driver * sc.drive.pitch * r["driver.speed"] / (2 * math.pi)
         c = sc.parameters["chain.link_mass"] / sc.drive.pitch * v * v
         assert np.all(r["slack_span.tension"] >= c * (1 - 1e-12) - 1e-9)
-        # span roles follow the power flow, not the momentary size (models/span_roles.py):
+        # span roles follow the power flow, not the momentary size (kernels/span_roles.py):
         # the larger of the two span tensions is still the chain's largest link tension
         np.testing.assert_allclose(np.maximum(r["tight_span.tension"], r["slack_span.tension"]),
                                    r["chain.max_link_tension"], rtol=1e-12)

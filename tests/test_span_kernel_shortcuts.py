@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel.models import spans as S
-from chainmodel.models.spans import _mod_two_pi
+from chainmodel.kernels import spans as S
+from chainmodel.kernels.spans import _mod_two_pi
 
 EDGES = [0.0, -0.0, 2 * math.pi, 4 * math.pi, -2 * math.pi, math.pi, -math.pi,
          math.nextafter(2 * math.pi, 0.0), math.nextafter(4 * math.pi, 0.0),

@@ -1,5 +1,5 @@
 """Span roles by power flow at every level (issue 21 item 2; DESIGN.md "Span roles follow the
-power flow"; rule in chainmodel/models/span_roles.py).
+power flow"; rule in chainmodel/kernels/span_roles.py).
 
 The number checked is the driven sprocket's torque balance (seed 004 eq 50) over a window of
 whole tooth periods at steady speed: the chain holds the driven sprocket against its load and
@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel.models.span_roles import lower_tight, lower_tight_many
+from chainmodel.kernels.span_roles import lower_tight, lower_tight_many
 
 
 def _balance(name, level, rpm, duration=1.2, start=0.6, **kw):

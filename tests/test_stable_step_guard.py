@@ -18,7 +18,8 @@ import pytest
 import chainmodel
 from chainmodel.integrate import stability_limit
 from chainmodel.models import Inputs, SimulationDiverged
-from chainmodel.models import multibody_kernels as MK
+from chainmodel import _numba
+from chainmodel.kernels.multibody_forces import omega_bound
 
 LOAD = 400.0     # N.m on the driven sprocket (its pitch radius is 73 mm)
 
@@ -80,9 +81,9 @@ def test_automatic_step_adapts_to_the_stiffening_span():
     assert h_now <= st.step_bound(st.model.omega_at(st.t, st.x, u)) * (1 + 1e-9)
 
 
-@pytest.mark.skipif(not MK.numba_enabled(), reason="compares the compiled guard with Python")
+@pytest.mark.skipif(not _numba.enabled(), reason="compares the compiled guard with Python")
 def test_level3_guard_frequency_is_the_models_bound():
-    """The compiled loop's estimate (multibody_kernels._omega_loops) is MultibodyModel.omega_max
+    """The compiled loop's estimate (kernels.multibody_forces.omega_bound) is MultibodyModel.omega_max
     of the same state, the stretched links counted with their current stiffness."""
     sc = chainmodel.Scene.from_preset("xu2010", fidelity=3)
     m = sc.model()
@@ -92,8 +93,8 @@ def test_level3_guard_frequency_is_the_models_bound():
         # scaling the rollers about O scales every link; at 0.4 |k (L - l0)| / L = 1.5 k
         y = x.copy()
         y[2:n] *= scale
-        compiled = MK._OMEGA(y[:n], m.P, m._omega_constants)
+        compiled = omega_bound(y[:n], m.P, m._omega_constants)
         assert compiled == pytest.approx(m.omega_max(y), rel=1e-12)
-        assert MK._omega_loops(y[:n], m.P, m._omega_constants) == pytest.approx(compiled,
+        assert omega_bound.py_func(y[:n], m.P, m._omega_constants) == pytest.approx(compiled,
                                                                                  rel=1e-12)
     assert m.omega_max(y) > m.omega_max(x)

@@ -19,7 +19,7 @@ import pytest
 
 import chainmodel
 from chainmodel.integrate import OUTPUT_NAMES
-from chainmodel.models import multibody_kernels
+from chainmodel import _numba
 
 STEPS = (1e-5, 1e-4, 1e-3, 1e-2)
 DURATION = 0.3          # s; compared from 0.1 s on, every 10 ms (the coarsest step's points)
@@ -52,7 +52,7 @@ CASES = [
     # level 3's span modes are undamped by default and its ripple is then not converged in the
     # step at all (issue 10); with the joint dampers at 2 % it is
     pytest.param("xu2010", 3, 13.0, {"chain_joint_damping": 0.02}, id="xu2010-multibody",
-                 marks=pytest.mark.skipif(not multibody_kernels.numba_enabled(),
+                 marks=pytest.mark.skipif(not _numba.enabled(),
                                           reason="level 3 over 0.3 s needs the compiled loop")),
 ]
 

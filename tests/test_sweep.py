@@ -162,7 +162,7 @@ def test_case_metrics_match_the_run_summary():
 def test_no_compilation_per_case():
     """After one case, others with other parameters at the same level add no compiled
     specialisation: kernels compile (or load from numba's cache) once per process."""
-    from chainmodel.models import rk4_loop
+    from chainmodel.kernels import rk4_loop
     kernel = rk4_loop.advance_points      # simulate()'s compiled loop at levels 1-2
     if not hasattr(kernel, "signatures"):
         pytest.skip("numba is switched off (CHAINMODEL_NUMBA=0): nothing is compiled")

@@ -2,41 +2,27 @@
 test (issue 20, item 2).
 
 The kernels of levels 0-3 are compiled by numba (chainmodel._numba) and each dispatcher keeps
-its plain Python function at ``py_func``: the code that runs with CHAINMODEL_NUMBA=0. ENTRY
-lists, once, the kernels that Python code calls (the rest are called only from inside these);
-a short run of every level records the arguments of the first call of each, and the test calls
-the compiled kernel and its plain twin on copies of them: the results and every array the
-kernel writes must agree to round-off (1e-9 relative: numba may contract a*b+c into one
-rounding where Python rounds twice). The plain twins of the inner kernels are checked end to
-end by tests/test_torsional.py::test_kernel_plain_python_equals_compiled (a process with
-CHAINMODEL_NUMBA=0) and level 3's numpy force law by tests/test_multibody.py."""
+its plain Python function at ``py_func``: the code that runs with CHAINMODEL_NUMBA=0.
+chainmodel.kernels.TWINS lists, once, the kernels that Python code calls (the rest are called
+only from inside these); a short run of every level records the arguments of the first call of
+each, and the test calls the compiled kernel and its plain twin on copies of them: the results
+and every array the kernel writes must agree to round-off (1e-9 relative: numba may contract
+a*b+c into one rounding where Python rounds twice). The plain twins of the inner kernels are
+checked end to end by tests/test_torsional.py::test_runs_without_numba (a process with
+CHAINMODEL_NUMBA=0); level 3's kernels also against an independent numpy force law
+(tests/multibody_oracle.py, tests/test_multibody.py)."""
 
 from __future__ import annotations
 
 import copy
-import importlib
+import sys
 
 import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel import _numba
+from chainmodel import _numba, kernels
 from chainmodel.scene import load_scene
-
-#: (module, dispatcher) of every compiled kernel that Python code calls
-ENTRY = (
-    ("chainmodel.models.spans", "evaluate"),
-    ("chainmodel.models.rk4_loop", "advance_points"),
-    ("chainmodel.models.rk4_loop", "advance_held"),
-    ("chainmodel.models.rk4_loop", "outputs_into"),
-    ("chainmodel.models.rk4_loop", "omega_estimate"),
-    ("chainmodel.models.kinematic_kernel", "driven_rotation"),
-    ("chainmodel.models.equilibrium", "static_state"),
-    ("chainmodel.models.multibody_kernels", "_accel_jit"),
-    ("chainmodel.models.multibody_kernels", "_outputs_jit"),
-    ("chainmodel.models.multibody_kernels", "_POINTS"),
-    ("chainmodel.models.multibody_kernels", "_HELD"),
-)
 
 needs_numba = pytest.mark.skipif(not _numba.enabled(),
                                  reason="CHAINMODEL_NUMBA=0: there is no compiled twin")
@@ -44,19 +30,23 @@ needs_numba = pytest.mark.skipif(not _numba.enabled(),
 
 @pytest.fixture(scope="module")
 def recorded():
-    """The arguments of the first call of every ENTRY kernel during short runs of every level
-    (simulate, the FMU's held step, the model interface)."""
+    """The arguments of the first call of every TWINS kernel during short runs of every level
+    (simulate, the FMU's held step, the model interface). Every chainmodel module that holds
+    the kernel under its name (the kernel's own module, a model importing it by name) gets the
+    recorder for the second run."""
     _runs()         # compiles every kernel first: a compiled caller resolves its callees then
     calls, saved = {}, []
-    for module_name, name in ENTRY:
-        module = importlib.import_module(module_name)
-        kernel = getattr(module, name)
-        saved.append((module, name, kernel))
+    for entry in kernels.TWINS:
+        kernel = kernels.kernel(entry)
+        name = entry.split(".")[1]
 
-        def recorder(*args, _kernel=kernel, _key=(module_name, name)):
+        def recorder(*args, _kernel=kernel, _key=entry):
             calls.setdefault(_key, copy.deepcopy(args))
             return _kernel(*args)
-        setattr(module, name, recorder)
+        for module in [m for n, m in list(sys.modules.items()) if n.startswith("chainmodel")]:
+            if getattr(module, name, None) is kernel:
+                saved.append((module, name, kernel))
+                setattr(module, name, recorder)
     try:
         _runs()
     finally:
@@ -68,6 +58,8 @@ def recorded():
 def _runs():
     for level in (0, 1, 2, 3):
         chainmodel.simulate("xu2010", fidelity=level, duration=0.002)
+    scene = load_scene("xu2010", fidelity=0)
+    scene.model().outputs(1e-3, np.empty(0), scene.inputs(1e-3))
     for level in (1, 2, 3):
         scene = load_scene("xu2010", fidelity=level)
         stepper = scene.stepper()
@@ -75,6 +67,9 @@ def _runs():
         model, x, u = scene.model(), stepper.x, scene.inputs(1e-3)
         model.rhs(1e-3, x, u)
         model.outputs(1e-3, x, u)
+        model.snapshot(1e-3, x, u)
+        if level < 3:
+            model.outputs_many(np.array([1e-3]), x[None, :], [0.0], [12.0], [0.0], [43.2])
 
 
 def _same(a, b, what):
@@ -92,17 +87,25 @@ def _same(a, b, what):
 
 
 @needs_numba
-@pytest.mark.parametrize("module_name, name", ENTRY, ids=[f"{m.rsplit('.', 1)[1]}.{n}"
-                                                           for m, n in ENTRY])
-def test_compiled_kernel_equals_its_plain_twin(module_name, name, recorded):
-    assert (module_name, name) in recorded, "the short runs no longer call this kernel"
-    kernel = getattr(importlib.import_module(module_name), name)
-    args = recorded[(module_name, name)]
+@pytest.mark.parametrize("entry", kernels.TWINS)
+def test_compiled_kernel_equals_its_plain_twin(entry, recorded):
+    assert entry in recorded, "the short runs no longer call this kernel"
+    kernel = kernels.kernel(entry)
+    assert kernels.plain(entry) is kernel.py_func and kernel.py_func is not kernel
+    args = recorded[entry]
     compiled_args, plain_args = copy.deepcopy(args), copy.deepcopy(args)
     got = kernel(*compiled_args)
-    want = kernel.py_func(*plain_args)
+    want = kernels.plain(entry)(*plain_args)
     if got is not None or want is not None:
         _same(got, want, "result")
     for k, (a, b) in enumerate(zip(compiled_args, plain_args)):
         if isinstance(a, np.ndarray):
             _same(a, b, f"argument {k}")
+
+
+def test_the_registry_names_every_kernel_once():
+    assert len(set(kernels.TWINS)) == len(kernels.TWINS)
+    for entry in kernels.TWINS:
+        assert callable(kernels.plain(entry)), entry
+    with pytest.raises(ValueError, match="not in chainmodel.kernels.TWINS"):
+        kernels.kernel("spans.no_such_kernel")

@@ -62,8 +62,8 @@ class Inputs:
         return self
 
 
-# the outputs of DESIGN.md: chainmodel.models.outputs (re-exported here)
-from .outputs import ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, OutputSpec  # noqa: E402
+# the outputs of DESIGN.md: chainmodel.outputs (re-exported here)
+from ..outputs import ALL_OUTPUTS, CORE_OUTPUTS, EXTRA_OUTPUTS, OutputSpec  # noqa: E402
 
 QUASI_STATIC = "quasi-static estimate at this fidelity level: "
 

@@ -19,7 +19,7 @@ eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static s
 seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
 A span cannot push: if one tension would be negative it is zero and the other carries the whole
 torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
-torques), and the tight span is the one the power flow names (models/span_roles.py).
+torques), and the tight span is the one the power flow names (kernels/span_roles.py).
 """
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ from ..kinematics.wrapping import chain_geometry
 from . import limits
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension,
                    check_pretension, quasi_static_extras)
-from .kinematic_kernel import level0_outputs
-from .span_roles import lower_tight_many
+from ..kernels.kinematic import level0_outputs
+from ..kernels.span_roles import lower_tight_many
 from .static_tension import (loose_chain_error, pretension_error,  # noqa: F401  (re-exported)
                              seat_series_compliance, seat_stiffness, seated_tension,
                              static_span_tension)
@@ -160,7 +160,7 @@ class KinematicModel(Model):
                                          g.lower.arm_end, load)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
-            # span roles by power flow, from the inputs (chainmodel.models.span_roles)
+            # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
             upper = ~lower_tight_many(torque[sel], p["driven.damping"], p["driven.inertia"],
                                       drive.tooth_ratio, speed[sel], acceleration[sel])
             out["driver.angle"][sel] = angle[sel]
@@ -184,9 +184,9 @@ class KinematicModel(Model):
 
     @cached_property
     def _kernel_constants(self):
-        """(K, G, C) of the scalar compiled evaluation (:mod:`.kinematic_kernel`)."""
-        from . import kinematic_kernel as KK
-        from .spans import geometry_constants
+        """(K, G, C) of the scalar compiled evaluation (:mod:`chainmodel.kernels.kinematic`)."""
+        from ..kernels import kinematic as KK
+        from ..kernels.spans import geometry_constants
         p, d = self.params, self.drive
         C = np.empty(KK.C_SIZE)
         C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],
@@ -200,7 +200,7 @@ class KinematicModel(Model):
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
         """Every output (ALL_OUTPUTS order) into ``out``: the scalar compiled twin of
-        :meth:`evaluate` (:func:`.kinematic_kernel.level0_outputs`), one call; True when all
+        :meth:`evaluate` (:func:`chainmodel.kernels.kinematic.level0_outputs`), one call; True when all
         are finite."""
         K, G, C = self._kernel_constants
         return level0_outputs(float(angle), float(speed), float(acceleration), float(torque), K, G, C,

@@ -38,7 +38,7 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from ..geometry import Drive
-from . import spans as S
+from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
 from .torsional import TorsionalModel
 

@@ -48,10 +48,13 @@ from ..geometry import Drive
 from ..kinematics import driven_rotation
 from ..kinematics import fourbar as fb
 from ..kinematics.wrapping import chain_geometry, roller_positions
-from . import multibody_kernels as K
+from ..kernels import multibody_layout as K
+from ..kernels.multibody_forces import accel, link_potential
+from ..kernels.multibody_loops import run_held, run_points
+from ..kernels.multibody_outputs import engaged_numpy, fill_outputs, span_ends
+from ..outputs import O_DRIVER_ANGLE, O_DRIVER_SPEED, O_VELOCITY_RATIO, OUTPUT_NAMES
+from ..kernels.spans import geometry_constants, span_geometry
 from .base import Inputs, Model, SimulationDiverged
-from .span_roles import lower_tight_many
-from .spans import geometry_constants, span_geometry
 
 __all__ = ["MultibodyModel", "flank_geometry"]
 
@@ -103,16 +106,13 @@ class MultibodyModel(Model):
     #: stable step (docs/multibody.md, benchmark in docs/performance.md)
     preferred_method = "verlet"
 
-    def __init__(self, drive: Drive, params: Mapping[str, Any], *, use_numba: bool | None = None):
+    def __init__(self, drive: Drive, params: Mapping[str, Any]):
         super().__init__(drive, params)
         # the scene validates already; a direct caller gets the same checks and messages
         self.params = p = PRM.validate({k: v for k, v in params.items() if k in PRM.BY_NAME})
         if drive.links < 3:  # pragma: no cover - Drive asks for >= 4
             raise ValueError(f"drive.links must be at least 3, got {drive.links}")
         self.M = M = drive.links
-        self.use_numba = K.numba_enabled() if use_numba is None else bool(use_numba)
-        if self.use_numba and not K.HAVE_NUMBA:
-            raise ValueError("use_numba=True but numba is not installed")
         pitch = drive.pitch
         k = p["chain.link_stiffness"]
         l0 = pitch - p["chain.pretension"] / k
@@ -160,7 +160,7 @@ class MultibodyModel(Model):
         self._mids = np.array([[self._mid_upper.real, self._mid_upper.imag],
                                [self._mid_lower.real, self._mid_lower.imag]])
         self._spans_out = np.zeros((2, 3), np.int64)
-        self._out14 = np.zeros(len(K.OUTPUT_NAMES))
+        self._out14 = np.zeros(len(OUTPUT_NAMES))
         self._engaged_tol = clearance + ENGAGED_TOLERANCE * pitch
 
     # --- state -----------------------------------------------------------------------------
@@ -221,10 +221,9 @@ class MultibodyModel(Model):
         return x
 
     # --- dynamics --------------------------------------------------------------------------
-    def _accel(self, x, tau, tau_d, tau_dd, load, use_numba=None):
+    def _accel(self, x, tau, tau_d, tau_dd, load):
         n = 2 + 2 * self.M
-        fn = K.accel_numba if (self.use_numba if use_numba is None else use_numba) else K.accel_numpy
-        return fn(x[:n], x[n:], tau, tau_d, tau_dd, load, self.P, self.ws)
+        return accel(x[:n], x[n:], tau, tau_d, tau_dd, load, self.P, self.ws)
 
     def rhs(self, t: float, x: np.ndarray, u: Inputs) -> np.ndarray:
         n = 2 + 2 * self.M
@@ -281,7 +280,7 @@ class MultibodyModel(Model):
             f"multibody model diverged at t = {t:.6g} s: link {i} has length {L[i]:.3g} "
             "pitches while the rest of the chain is not stretched; try a smaller solver.step")
 
-    # --- compiled stepping (multibody_kernels, numba) ------------------------------------
+    # --- compiled stepping (kernels.multibody_loops) ----------------------------------------
     #: fixed-step methods with a compiled loop: advance_points / advance_held
     compiled_methods = ("verlet", "rk4")
     #: the automatic step is the stability bound of the current state (90 % of it, the
@@ -291,23 +290,22 @@ class MultibodyModel(Model):
     tolerance_applies = False
 
     def has_loop_kernel(self, method: str) -> bool:
-        """The compiled loops only: without numba the steppers' own loop on the vectorised
-        numpy force law is far faster than the kernels' loops run as plain Python."""
-        return self.use_numba and method in self.compiled_methods
+        """The kernels' loops, compiled or (CHAINMODEL_NUMBA=0) their plain twins."""
+        return method in self.compiled_methods
 
     def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
                        out, states, log, log_cap):
         """The fixed-step loop of ``method`` (verlet exactly as ``Verlet._step``, rk4 as
         ``RK4._step``) through the communication points ``times`` in one compiled call, with
-        the outputs at every point (multibody_kernels._advance_points_loops); None without
-        numba. Inputs inside a communication step: a cubic Hermite through its ends' angle and
-        speed (exact for held inputs and the scene ramps)."""
+        the outputs at every point (kernels.multibody_loops.points_loop). Inputs inside a
+        communication step: a cubic Hermite through its ends' angle and speed (exact for held
+        inputs and the scene ramps)."""
         if not self.has_loop_kernel(method):
             return None
-        res = K.advance_points_numba(0 if method == "verlet" else 1, x_in, x_out, times, angle,
-                                     speed, acceleration, torque, self.P, self._omega_constants,
-                                     self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
-                                     self.drive.tooth_ratio, self._spans_out, out, states)
+        res = run_points(0 if method == "verlet" else 1, x_in, x_out, times, angle,
+                         speed, acceleration, torque, self.P, self._omega_constants,
+                         self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
+                         self.drive.tooth_ratio, self._spans_out, out, states)
         if out.shape[0] and res[1] == 0:
             rows = slice(1, times.shape[0])
             self._ratio_at_rest(out[rows], angle[rows], speed[rows])
@@ -316,14 +314,14 @@ class MultibodyModel(Model):
     def advance_held(self, method, x_in, x_out, t0, t1, angle, speed, acceleration, torque, cfg,
                      out, log):
         """:meth:`advance_points` over one communication step with the inputs held first-order
-        (the FMU's hold), outputs at t1 in out[1]; None without numba."""
+        (the FMU's hold), outputs at t1 in out[1]."""
         if not self.has_loop_kernel(method):
             return None
-        res = K.advance_held_numba(0 if method == "verlet" else 1, x_in, x_out, t0, t1, angle,
-                                   speed, acceleration, torque, self.P, self._omega_constants,
-                                   self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
-                                   self.drive.tooth_ratio, self._spans_out, out)
-        if res[1] == 0 and abs(out[1, 1]) < REST_SPEED:
+        res = run_held(0 if method == "verlet" else 1, x_in, x_out, t0, t1, angle,
+                       speed, acceleration, torque, self.P, self._omega_constants,
+                       self._bounded(cfg), self.ws, self._mids, self._engaged_tol,
+                       self.drive.tooth_ratio, self._spans_out, out)
+        if res[1] == 0 and abs(out[1, O_DRIVER_SPEED]) < REST_SPEED:
             self._ratio_at_rest(out[1:2], np.array([angle + speed * (t1 - t0)]),
                                 np.array([speed]))
         return res
@@ -347,22 +345,20 @@ class MultibodyModel(Model):
     def _ratio_at_rest(self, rows, angle, speed) -> None:
         """velocity_ratio of the rows whose driver is at rest (|speed| < REST_SPEED): the exact
         four-bar ratio at the driver's angle (level 0), as :meth:`outputs` reports it."""
-        rest = np.abs(rows[:, 1]) < REST_SPEED
+        rest = np.abs(rows[:, O_DRIVER_SPEED]) < REST_SPEED
         if not rest.any():
             return
         for rev in (False, True):
             sel = rest & ((np.asarray(speed) < 0) == rev)
             if sel.any():
-                rows[sel, 9] = driven_rotation(self.drive, rows[sel, 0], reverse=rev).velocity_ratio
+                rows[sel, O_VELOCITY_RATIO] = driven_rotation(self.drive, rows[sel, O_DRIVER_ANGLE],
+                                                              reverse=rev).velocity_ratio
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
-        """Every output (ALL_OUTPUTS order) into ``out``: one compiled call with numba."""
-        if not self.use_numba:
-            return super().outputs_into(t, x, angle, speed, acceleration, torque, out)
-        K.outputs_numba(x, angle, speed, acceleration, torque, self.P, self.ws, self._mids,
-                        self._engaged_tol, speed < 0, self.drive.tooth_ratio, self._spans_out,
-                        out)
-        if abs(out[1]) < REST_SPEED:
+        """Every output (ALL_OUTPUTS order) into ``out``: one kernel call."""
+        fill_outputs(x, angle, speed, acceleration, torque, self.P, self.ws, self._mids,
+                     self._engaged_tol, speed < 0, self.drive.tooth_ratio, self._spans_out, out)
+        if abs(out[O_DRIVER_SPEED]) < REST_SPEED:
             self._ratio_at_rest(out.reshape(1, -1), np.array([angle]), np.array([speed]))
 
     def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
@@ -374,7 +370,7 @@ class MultibodyModel(Model):
         mass-normalised tangent stiffness; derivation in docs/multibody.md), raised to the
         damping rate (4 c + c_c + 16 c_j / p^2) / m if that is larger. With a state x the links
         count with their current stiffness max(k, |T| / L) (the guard of the compiled loop,
-        multibody_kernels._omega_loops, computes the same)."""
+        kernels.multibody_forces.omega_bound, computes the same)."""
         p = self.params
         k = p["chain.link_stiffness"]
         k_link = k
@@ -475,7 +471,7 @@ class MultibodyModel(Model):
 
     @cached_property
     def _static(self) -> tuple[float, float, float]:
-        key = (self.drive, tuple(sorted(self.params.items())), self.use_numba)
+        key = (self.drive, tuple(sorted(self.params.items())))
         if key not in _STATIC_CACHE:
             if len(_STATIC_CACHE) > 64:
                 _STATIC_CACHE.clear()
@@ -489,7 +485,7 @@ class MultibodyModel(Model):
         relax["driven.damping"] = max(relax["driven.damping"],
                                       0.2 * math.sqrt(relax["driven.inertia"] * 1e4))
         relax["multibody.rotating_frame_forces"] = False
-        model = MultibodyModel(self.drive, relax, use_numba=self.use_numba)
+        model = MultibodyModel(self.drive, relax)
         from ..integrate import Verlet
         u = Inputs(0.0, 0.0, 0.0)
         st = Verlet(model, 0.0, None, u)
@@ -537,87 +533,30 @@ class MultibodyModel(Model):
         """(2, M) bool: roller seated on the driver / driven sprocket (within the clearance of a
         seat centre, or touching a seat within the pitch radius plus the clearance; a roller
         riding a flank farther out is entering or leaving)."""
-        return K.engaged_numpy(np.asarray(x[:2 + 2 * self.M]), self.ws.dist, self.ws.side,
+        return engaged_numpy(np.asarray(x[:2 + 2 * self.M]), self.ws.dist, self.ws.side,
                                self.ws.seat_angle, self._engaged_tol, self.P)
 
     def _evaluate(self, t, x, u):
         """Forces at (t, x, u) and the spans: ((mid link, start roller, end roller) of the upper
-        and the lower span; see multibody_kernels._spans_loops)."""
+        and the lower span; see kernels.multibody_outputs.span_ends)."""
         n = 2 + 2 * self.M
         acc, status, shaft = self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
         spans = self._spans_out
-        if self.use_numba:
-            K.spans_numba(x[:n], self.ws.dist, self.ws.side, self.ws.seat_angle,
-                          self._engaged_tol, self.P, self._mids, spans)
-        else:
-            K.spans_numpy(x[:n], self.ws.dist, self.ws.side, self.ws.seat_angle,
-                          self._engaged_tol, self.P, self._mids, spans)
+        span_ends(x[:n], self.ws.dist, self.ws.side, self.ws.seat_angle, self._engaged_tol,
+                  self.P, self._mids, spans)
         z = x[2:n].reshape(self.M, 2)
         return acc, shaft, z, tuple(int(i) for i in spans[0]), tuple(int(i) for i in spans[1])
 
     def outputs(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
-        if self.use_numba:
-            out = self._out14
-            K.outputs_numba(np.asarray(x, float), u.angle, u.speed, u.acceleration, u.torque,
-                            self.P, self.ws, self._mids, self._engaged_tol, u.speed < 0,
-                            self.drive.tooth_ratio, self._spans_out, out)
-            res = dict(zip(K.OUTPUT_NAMES, out.tolist()))
-            if abs(res["driver.speed"]) < REST_SPEED:
-                res["velocity_ratio"] = float(driven_rotation(
-                    self.drive, res["driver.angle"], reverse=u.speed < 0).velocity_ratio)
-            return res
-        return self._outputs_numpy(t, x, u)
-
-    def _outputs_numpy(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, float]:
-        p = self.params
-        n = 2 + 2 * self.M
-        acc, shaft, z, up, low = self._evaluate(t, x, u)
-        rigid = p["input_shaft.rigid"]
-        phi1 = u.angle if rigid else x[0]
-        w1 = u.speed if rigid else x[n]
-        phi2, w2 = x[1], x[n + 1]
-        reverse = u.speed < 0
-        tension = self.ws.tension
-        # span roles by power flow, from the inputs (chainmodel.models.span_roles)
-        lower = bool(lower_tight_many(u.torque, self.P[K.I_C2], self.P[K.I_I2],
-                                      self.drive.tooth_ratio, u.speed, u.acceleration))
-        tight, slack = (low, up) if lower else (up, low)
-        centre_from = self._centres[0] if lower else self._centres[1]
-        _, a, b = tight
-        A, B = z[a], z[b]
-        nl = (b - a) % self.M
-        mid_z = (z[(a + nl // 2) % self.M] if nl % 2 == 0 else
-                 0.5 * (z[(a + nl // 2) % self.M] + z[(a + nl // 2 + 1) % self.M]))
-        chord = B - A
-        length = float(math.hypot(*chord))
-        if length > 0:
-            normal = np.array([-chord[1], chord[0]]) / length
-            if normal @ (A - centre_from) < 0:
-                normal = -normal
-            deflection = float(normal @ (mid_z - A))
-        else:  # pragma: no cover
-            deflection = 0.0
-        if abs(w1) >= REST_SPEED:
-            ratio = w2 / w1
-        else:
-            ratio = float(driven_rotation(self.drive, phi1, reverse=reverse).velocity_ratio)
-        return {
-            "driver.angle": float(phi1),
-            "driver.speed": float(w1),
-            "driven.angle": float(phi2),
-            "driven.speed": float(w2),
-            "driven.acceleration": float(acc[1]),
-            "input_shaft.torque": float(shaft),
-            "tight_span.tension": float(tension[tight[0]]),
-            "slack_span.tension": float(tension[slack[0]]),
-            "tight_span.length": length,
-            "velocity_ratio": float(ratio),
-            "transmission_error": float(phi2 - self.drive.tooth_ratio * phi1),
-            "tight_span.midspan_deflection": deflection,
-            "chain.max_link_tension": float(np.max(tension)),
-            "contact.max_force": float(np.max(self.ws.fcon)),
-            "chain.min_link_tension": float(np.min(tension)),
-        }
+        out = self._out14
+        fill_outputs(np.asarray(x, float), u.angle, u.speed, u.acceleration, u.torque, self.P,
+                     self.ws, self._mids, self._engaged_tol, u.speed < 0, self.drive.tooth_ratio,
+                     self._spans_out, out)
+        res = dict(zip(OUTPUT_NAMES, out.tolist()))
+        if abs(res["driver.speed"]) < REST_SPEED:
+            res["velocity_ratio"] = float(driven_rotation(
+                self.drive, res["driver.angle"], reverse=u.speed < 0).velocity_ratio)
+        return res
 
     def snapshot(self, t: float, x: np.ndarray, u: Inputs) -> dict[str, np.ndarray]:
         """Arrays for plots: roller_positions (M, 2) [m], link_tension (M,) [N] (link i joins
@@ -656,8 +595,8 @@ class MultibodyModel(Model):
             + 0.5 * p["driven.inertia"] * v[1] ** 2
         z = q[2:].reshape(self.M, 2)
         L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
-        links = float(np.sum(K.link_potential(L - self.P[K.I_L0], p["chain.link_stiffness"],
-                                              self.P[K.I_GAP])))
+        links = float(np.sum(link_potential(L - self.P[K.I_L0], p["chain.link_stiffness"],
+                                            self.P[K.I_GAP])))
         self._accel(x, u.angle, u.speed, u.acceleration, u.torque)
         pen = np.where(self.ws.side > 0, self.ws.fcon / p["contact.stiffness"], 0.0)
         contact = 0.5 * p["contact.stiffness"] * float(pen @ pen)

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..geometry import Drive
 from .base import Inputs, Model, SimulationDiverged
-from .outputs import OutputSpec
+from ..outputs import OutputSpec
 
 __all__ = ["TorqueCausalModel", "torque_causal_model", "steady_motor_torque",
            "reflected_inertia", "MOTOR_INPUT", "MOTOR_OUTPUTS"]

@@ -43,8 +43,8 @@ import numpy as np
 
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
-from . import rk4_loop as L
-from . import spans as S
+from ..kernels import rk4_loop as L
+from ..kernels import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_series_compliance, seat_stiffness, static_span_tension
@@ -203,10 +203,10 @@ class TorsionalModel(Model):
         """Rest, in static equilibrium under the load torque ``u.torque`` with the input shaft
         held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
         balances the span tensions, found by bracketing from the level-0 configuration
-        (:func:`chainmodel.models.equilibrium.static_state`, one compiled call)."""
-        from . import equilibrium as E
-        from .kinematic_kernel import driven_rotation as scalar_rotation
-        from .kinematic_kernel import fourbar_constants
+        (:func:`chainmodel.kernels.equilibrium.static_state`, one compiled call)."""
+        from ..kernels import equilibrium as E
+        from ..kernels.kinematic import driven_rotation as scalar_rotation
+        from ..kernels.kinematic import fourbar_constants
         d = self.drive
         modal = self._modal_initial(u)
         x = np.concatenate([np.zeros(self.n_sprocket_states), modal])
@@ -238,7 +238,7 @@ class TorsionalModel(Model):
         # generalised force on the driven sprocket: J21 acc1 + J22 acc2
         return mm[S.P_J12] * aux[S.A_ACC1] + mm[S.P_J22] * aux[S.A_ACC2]
 
-    # --- compiled stepping (chainmodel.models.rk4_loop) -------------------------------------
+    # --- compiled stepping (chainmodel.kernels.rk4_loop) -------------------------------------
     #: fixed-step methods with a compiled loop (numba): advance_points / advance_held
     compiled_methods: ClassVar[tuple[str, ...]] = ("rk4",)
 
@@ -267,7 +267,7 @@ class TorsionalModel(Model):
     def advance_points(self, method, x_in, x_out, times, angle, speed, acceleration, torque, cfg,
                        out, states, log, log_cap):
         """The fixed-step loop of ``method`` through the communication points ``times`` in one
-        compiled call (:func:`chainmodel.models.rk4_loop.advance_points`: step rule, guard,
+        compiled call (:func:`chainmodel.kernels.rk4_loop.advance_points`: step rule, guard,
         events, outputs into ``out`` rows 1.., states into ``states``; x_in untouched, the
         final state in x_out), or None when there is none (another method)."""
         if not self.has_loop_kernel(method):
@@ -285,7 +285,7 @@ class TorsionalModel(Model):
                               self.P, self.loop_constants, cfg, out, log)
 
     def omega_at(self, t: float, x: np.ndarray, u: Inputs) -> float:
-        """Highest natural frequency of the state x [rad/s] (:func:`~chainmodel.models.rk4_loop.
+        """Highest natural frequency of the state x [rad/s] (:func:`~chainmodel.kernels.rk4_loop.
         omega_estimate`: the sprockets' bound; at level 2 also the span modes at their current
         tension): the stable-step guard's estimate."""
         aux = self._eval(t, np.asarray(x, float), u)[1]

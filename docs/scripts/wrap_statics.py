@@ -6,7 +6,7 @@
 A prototype, not part of the models: one sprocket's whole wrap (n seated rollers) with both
 ends pulled tangentially by the span tensions Ta and Tb, every roller in level 3's seat (arc of
 radial clearance dR = R_t - R_r, flanks beyond gamma = 60 deg - 45 deg / z; contact stiffness
-k_c), links tension-only with joint play (multibody_kernels._accel_loops), solved as a minimum
+k_c), links tension-only with joint play (kernels.multibody_forces.accelerations), solved as a minimum
 of the potential energy. ``give`` returns how far each span end is pulled out of the wrap. The
 length balance n_span (Tu + Tl) / (2 k) + the four ends' give = L - M p then gives the static
 span tension and the loaded split at rest (xu2010: 25/17 teeth, 15/9 wrapped rollers, 24.77

@@ -18,7 +18,8 @@ import math
 
 import numpy as np
 
-from .spans import (A_ACC1, A_ACC2, A_SIZE, P_J12, P_J22, P_RIGID, evaluate, jit)
+from .._numba import jit
+from .spans import A_ACC1, A_ACC2, A_SIZE, P_J12, P_J22, P_RIGID, evaluate
 
 __all__ = ["static_state", "STATUS_OK", "STATUS_NO_DRIVEN", "STATUS_NO_DRIVER"]
 

@@ -24,7 +24,13 @@ import math
 
 import numpy as np
 
-from .spans import jit, span_geometry
+from .._numba import jit
+from ..outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CONTACT_MAX_FORCE,
+                       O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED, O_DRIVER_ANGLE,
+                       O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
+                       O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
+                       O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
+from .spans import span_geometry
 from .span_roles import lower_tight
 
 __all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "K_SIZE", "C_SIZE"]
@@ -129,7 +135,7 @@ def driven_rotation(phi, w, a, reverse, K):
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
     acc) and the load torque into ``out``: the tight span is the one the driver pulls for the
-    direction of the transmitted torque (chainmodel.models.span_roles), and the reported span
+    direction of the transmitted torque (chainmodel.kernels.span_roles), and the reported span
     and link tensions include the centrifugal tension C[C_CENTRIFUGAL] speed^2, the sag and the seat
     force not (KinematicModel.evaluate). True when every output is finite."""
     rev = speed < 0.0
@@ -160,28 +166,28 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
         slack = t_up
         length = g[9]
     centrifugal = C[C_CENTRIFUGAL] * speed * speed
-    out[0] = angle
-    out[1] = speed
-    out[2] = phi2
-    out[3] = w2
-    out[4] = a2
-    out[5] = tau_in
-    out[6] = tight + centrifugal
-    out[7] = slack + centrifugal
-    out[8] = length
-    out[9] = ratio
-    out[10] = phi2 - C[C_RATIO] * angle
+    out[O_DRIVER_ANGLE] = angle
+    out[O_DRIVER_SPEED] = speed
+    out[O_DRIVEN_ANGLE] = phi2
+    out[O_DRIVEN_SPEED] = w2
+    out[O_DRIVEN_ACCELERATION] = a2
+    out[O_INPUT_SHAFT_TORQUE] = tau_in
+    out[O_TIGHT_SPAN_TENSION] = tight + centrifugal
+    out[O_SLACK_SPAN_TENSION] = slack + centrifugal
+    out[O_TIGHT_SPAN_LENGTH] = length
+    out[O_VELOCITY_RATIO] = ratio
+    out[O_TRANSMISSION_ERROR] = phi2 - C[C_RATIO] * angle
     # quasi_static_extras: static sag of the tight span, reported negative
     sag = math.inf
     if tight != 0.0:
         sag = C[C_RHO_G] * length ** 2 / (8.0 * tight)
     if tight > 0 and math.isfinite(sag):
-        out[11] = -min(sag, length / 2)
+        out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = -min(sag, length / 2)
     else:
-        out[11] = -(length / 2)
-    out[12] = max(tight, slack) + centrifugal
-    out[13] = tight
-    out[14] = min(tight, slack) + centrifugal
+        out[O_TIGHT_SPAN_MIDSPAN_DEFLECTION] = -(length / 2)
+    out[O_CHAIN_MAX_LINK_TENSION] = max(tight, slack) + centrifugal
+    out[O_CONTACT_MAX_FORCE] = tight
+    out[O_CHAIN_MIN_LINK_TENSION] = min(tight, slack) + centrifugal
     for k in range(out.shape[0]):
         if not math.isfinite(out[k]):
             return False

@@ -1,9 +1,9 @@
 """The fixed-step loop, written once: the internal step rule, the stable-step guard, the event
 location and crossing, and - for levels 1 (torsional) and 2 (modal), compiled on their kernel -
 the outputs, over one or many communication steps in one call (numba; the same source as plain
-Python with ``CHAINMODEL_NUMBA=0``). Every other fixed-step run (a model without kernels, level
-3 without numba, the ``FixedStepper.compiled = False`` twin) runs these functions' own source
-on the model interface (:mod:`chainmodel.plain_loop` rebinds the six names that touch the model:
+Python with ``CHAINMODEL_NUMBA=0``). Every other fixed-step run (a model without kernels, the
+``integrate.python_loop_model`` twin) runs these functions' own source on the model interface
+(:mod:`chainmodel.kernels.plain_loop` rebinds the six names that touch the model:
 ``_rhs_at``, ``_switch``, ``_omega_at``, ``_event_step``, ``_after_step``, ``_step_from``).
 
 **Inputs inside a communication step** [t0, t1]: the input-shaft angle is the cubic Hermite
@@ -34,7 +34,7 @@ is split again (the stable-step guard). An explicit step with h w above RK4's st
 **Outputs** at each communication point come from the point's own inputs: the evaluation that
 ends the last step is reused when its inputs are those (held inputs), otherwise the kernel is
 evaluated once more. :func:`fill_outputs` maps the kernel's auxiliary values to the 15 outputs of
-DESIGN.md in :data:`chainmodel.models.base.ALL_OUTPUTS` order.
+DESIGN.md in :data:`chainmodel.outputs.ALL_OUTPUTS` order.
 """
 
 from __future__ import annotations
@@ -43,14 +43,15 @@ import math
 
 import numpy as np
 
-from .outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION,  # noqa: F401
+from .._numba import jit, jit_noalloc
+from ..outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION,  # noqa: F401
                       O_CONTACT_MAX_FORCE, O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
                       O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
                       O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
                       O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
-                    P_RHOA, P_RIGID, evaluate, evaluate_rate, jit, jit_noalloc)
+                    P_RHOA, P_RIGID, evaluate, evaluate_rate)
 from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
@@ -165,7 +166,7 @@ def _verlet_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     q1 = q + h v_half, v1 = v_half + h/2 a(t + h, [q1, v_half]) (velocity-dependent forces
     see the half-step velocity). Same arguments as :func:`_rk4_from` (k3, k4 unused); the
     loop on the model interface runs it for ``verlet`` (level 3's compiled loop is its own,
-    multibody_kernels)."""
+    chainmodel.kernels.multibody_loops)."""
     n = x.size // 2
     for i in range(n):
         v_half = x[n + i] + 0.5 * h * k1[n + i]
@@ -542,7 +543,7 @@ def _after_step(t, x, c, P, Q):
 def fill_outputs(x, aux, w_in, P, Q, out):
     """The 15 outputs (ALL_OUTPUTS order) from the state x and the kernel's evaluation ``aux``
     there; w_in the input-shaft speed. The tight span is the one the driver pulls for the
-    direction of the transmitted torque (chainmodel.models.span_roles, decided in the kernel's
+    direction of the transmitted torque (chainmodel.kernels.span_roles, decided in the kernel's
     evaluation from the inputs: aux[A_LOWER_TIGHT]), not the one with the larger tension at
     this instant. The reported span and link tensions include the centrifugal tension
     rho A v^2 = Q[Q_CENTRIFUGAL] w1^2 (chainmodel.models.base.centrifugal_tension); the sag and

@@ -1,11 +1,11 @@
-"""The fixed-step loop of :mod:`chainmodel.models.rk4_loop` run as plain Python on any
+"""The fixed-step loop of :mod:`chainmodel.kernels.rk4_loop` run as plain Python on any
 :class:`~chainmodel.models.base.Model` (issue 20, item 1: the stepping algorithm written once).
 
 The step rule, the stable-step guard, the event location (:func:`rk4_loop._locate`) and the
 crossing (:func:`rk4_loop._cross`) exist only in ``rk4_loop``. Levels 1-2 run them compiled
-(or as plain Python with ``CHAINMODEL_NUMBA=0``) on their kernel. Every other model - level 3
-without numba, a model without kernels, and levels 1-2 with ``FixedStepper.compiled = False``
-(the twin the tests compare) - runs the *same functions' source* (``py_func``), rebuilt here with
+(or as plain Python with ``CHAINMODEL_NUMBA=0``) on their kernel. Every other model - a model
+without kernels, and ``chainmodel.integrate.python_loop_model`` (the twin the tests and
+benchmarks compare) - runs the *same functions' source* (``py_func``), rebuilt here with
 the few names that touch the model bound to the model interface instead of the kernel:
 
 ==============  ==================================  ============================================
@@ -30,7 +30,7 @@ import types
 
 import numpy as np
 
-from .models import rk4_loop
+from . import rk4_loop
 
 __all__ = ["LoopContext", "LOOPS", "run_interval"]
 

@@ -30,19 +30,15 @@ import math
 
 import numpy as np
 
-from .._numba import ENABLED, jit, jit_noalloc
+from .._numba import jit, jit_noalloc
 from .span_roles import lower_tight
 
-__all__ = ["geometry_constants", "span_geometry", "NUMBA", "jit", "jit_noalloc", "G_SIZE"]
+__all__ = ["geometry_constants", "span_geometry", "G_SIZE"]
 
 _EDGE = 1e-9          # as chainmodel.kinematics.wrapping._EDGE: an endpoint at an event is past it
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
 G_SIZE = 13
-
-
-#: the one numba switch (chainmodel._numba.ENABLED), under its old name
-NUMBA = ENABLED
 
 
 def geometry_constants(drive) -> np.ndarray:
@@ -439,7 +435,7 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     aux[A_EV_LE] = math.sin(math.pi * ule)
     aux[A_MID_UP] = mid_u
     aux[A_MID_LOW] = mid_l
-    # span roles by power flow, from the inputs (chainmodel.models.span_roles)
+    # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
     aux[A_LOWER_TIGHT] = 1.0 if lower_tight(load, P[P_D2], P[P_J22], G[9] / G[10], w_in,
                                             a_in) else 0.0
 

@@ -3,7 +3,7 @@
 DESIGN.md: "the tight span is the one the driver pulls for the current direction of
 transmitted torque; a window's mean is the mean of one physical span". The upper span runs
 from the driven sprocket onto the driver, the lower span from the driver onto the driven
-sprocket (chainmodel.models.spans). The driven sprocket's torque balance
+sprocket (chainmodel.kernels.spans). The driven sprocket's torque balance
 (seed 004 eq 50, R_o the driven pitch radius)
 
     (T_upper - T_lower) R_o = load.torque + c_2 w_2 + J_2 dw_2/dt
