@@ -27,7 +27,7 @@ a potential V and its Jacobian is minus V's Hessian, symmetric. Newton on it:
   a slack chain touches no seat and floats with no stiffness at all).
 
 Converged when the largest roller force is below ``tol`` (a thousandth) of a roller's weight
-(m g, or the link stiffness times 1e-9 pitch without gravity) and the driven sprocket's torque
+(m g; without gravity 1e-2 tol of the largest link tension at the start) and the driven sprocket's torque
 below the same times its pitch radius.
 """
 
@@ -191,8 +191,11 @@ def solve_statics(model, driver_angle: float = 0.0, load: float = 0.0, start=Non
     x0 = model.initial_state(Inputs(float(driver_angle), 0.0, 0.0)) if start is None else start
     u = np.concatenate([[x0[1]], x0[2:pr.n]]).astype(float)
     g = abs(model.params["gravity"])
-    f_ref = pr.m * g if g > 0 else model.params["chain.link_stiffness"] * 1e-9 * model.drive.pitch
-    f_tol = tol * f_ref
+    f = pr.forces(u)
+    if g > 0:
+        f_tol = tol * pr.m * g
+    else:   # no weight to compare with: a hundredth of tol of the largest link tension
+        f_tol = 1e-2 * tol * max(float(np.max(np.abs(pr.ws.tension))), 1e-3)
     t_tol = f_tol * model.drive.driven.pitch_radius
     f = pr.forces(u)
     V = pr.potential(u)

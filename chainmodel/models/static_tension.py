@@ -63,7 +63,18 @@ def seat_series_compliance(params: Mapping[str, Any], drive: Drive | None = None
     they carry): the end moves towards the span by s + (T - T_w) / K_seat, s = R_t - R_r the
     roller-seat clearance. Per span (one end on each sprocket) that is the compliance
     2 / K_seat and the free length 2 s - (T_w,driver + T_w,driven) / K_seat; without ``drive``
-    the wrapped links are taken as unstrained (T_w = 0)."""
+    the wrapped links are taken as unstrained (T_w = 0).
+
+    With ``torsional.wrap_statics`` (and a drive with a link count) both come instead from
+    level 3's statics of the drive (:func:`~chainmodel.models.wrap_statics.wrap_fit`; the
+    ladder where level 3 has no static equilibrium)."""
+    if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
+        from .wrap_statics import wrap_fit
+        try:
+            fit = wrap_fit(drive, params)
+            return fit.compliance, fit.free_length
+        except ValueError:   # level 3 finds no equilibrium of this drive: the seat ladder
+            pass
     if not params["torsional.seat_compliance"]:
         return 0.0, 0.0
     k_seat = seat_stiffness(params["contact.stiffness"], params["chain.link_stiffness"])
