@@ -21,7 +21,8 @@ a potential V and its Jacobian is minus V's Hessian, symmetric. Newton on it:
   factorises and the step descends; D is H's diagonal (floored), which regularises the zero
   stiffness of a roller lying loose in its seat with its links inside the pin-bushing play;
 * a backtracking line search, the step taken when it lowers V (Armijo) or the residual's
-  norm, each roller's move capped at a tenth of a pitch;
+  norm, each roller's move (and the driven sprocket's at its pitch radius) capped at a tenth
+  of a pitch;
 * the start (:func:`sagged_layout`): the wrapped rollers at the bottom of their seats and each
   span longer than its chord hung as the parabola of its length (from the straight-span layout
   a slack chain touches no seat and floats with no stiffness at all).
@@ -199,6 +200,9 @@ def solve_statics(model, driver_angle: float = 0.0, load: float = 0.0, start=Non
     t_tol = f_tol * model.drive.driven.pitch_radius
     f = pr.forces(u)
     V = pr.potential(u)
+    # the driven sprocket's arc at its tooth tips counts like a roller's move: a free turn by
+    # a whole tooth would let the seats change rollers (and a loaded sprocket's V fall for ever)
+    r_turn = model.drive.driven.pitch_radius
     it = 0
     mu = 0.0
     converged = False
@@ -226,7 +230,8 @@ def solve_statics(model, driver_angle: float = 0.0, load: float = 0.0, start=Non
                 # it lowers V (Armijo) or the residual's norm - either merit alone stalls, V on
                 # a compressed straight span that must buckle into its sag, the residual
                 # across the kinks of the contacts and the links' play
-                alpha = min(1.0, 0.1 * model.drive.pitch / max(np.max(np.abs(step[1:])), 1e-300))
+                alpha = min(1.0, 0.1 * model.drive.pitch / max(np.max(np.abs(step[1:])),
+                                                               abs(step[0]) * r_turn, 1e-300))
                 slope = -(f @ step)
                 for _ in range(30):
                     un = u + alpha * step

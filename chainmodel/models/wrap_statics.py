@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from ..geometry import Drive
+from .multibody_statics import solve_statics, static_state
 
 __all__ = ["WrapFit", "wrap_fit", "LOAD_STEP"]
 
@@ -66,7 +67,6 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     if hit is not None:
         return hit
     from .multibody import MultibodyModel
-    from .multibody_statics import static_state
     from .static_tension import _rest_geometry
     from ..kinematics.wrapping import tooth_period_geometry
     import numpy as np
@@ -77,9 +77,16 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     t0 = rest.mean_tension
     ro = drive.driven.pitch_radius
     w = abs(p3["gravity"]) * p3["chain.link_mass"]
-    dm = LOAD_STEP * max(t0, w) * ro
-    plus = static_state(model, 0.0, dm)
-    minus = static_state(model, 0.0, -dm)
+    for share in (LOAD_STEP, 0.25 * LOAD_STEP, 0.05 * LOAD_STEP):
+        # a smaller step where a roller at a tooth tip (where its contact ends) stalls Newton
+        dm = share * max(t0, w) * ro
+        try:
+            plus = _loaded(model, rest, dm)
+            minus = _loaded(model, rest, -dm)
+            break
+        except ValueError:
+            if share == 0.05 * LOAD_STEP:
+                raise
     k3 = 2.0 * dm / abs(minus.driven_angle - plus.driven_angle)
     k = p3["chain.link_stiffness"]
     g = tooth_period_geometry(drive, 100)
@@ -105,3 +112,12 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         _CACHE.clear()
     _CACHE[key] = fit
     return fit
+
+
+def _loaded(model, rest, load):
+    """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
+    span's load step is small next to its distance from the straight layout)."""
+    try:
+        return solve_statics(model, 0.0, load, start=rest.state)
+    except ValueError:
+        return static_state(model, 0.0, load)
