@@ -121,7 +121,7 @@ def test_sagging_span_against_an_independent_discrete_catenary(dc):
     model._accel(sol.state, 0.0, 0.0, 0.0, 0.0)
     side = model.ws.side.copy()
     tension = model.ws.tension.copy()
-    from chainmodel.models import multibody_kernels as K
+    from chainmodel.models.multibody import K   # the kernels level 3 uses
     w = p["chain.link_mass"] * np.array([model.P[K.I_GX], model.P[K.I_GY]])
     l0 = model.P[K.I_L0]
     runs = sorted(_free_runs(side), key=len)[-2:]      # the two spans
