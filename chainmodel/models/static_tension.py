@@ -16,7 +16,7 @@ from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
 __all__ = ["static_span_tension", "seat_stiffness", "seat_series_compliance", "seated_tension",
-           "pretension_error", "loose_chain_error"]
+           "pretension_error", "loose_chain_error", "wrap_softness"]
 
 
 def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
@@ -123,7 +123,23 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     if drive.links is None:
         return params["chain.pretension"]
     x, d = _static_numerator(drive, params)
+    b = wrap_softness(params, drive)
+    if b > 0.0:
+        from .wrap_statics import softplus
+        return softplus(x / d, b)
     return max(0.0, x / d)
+
+
+def wrap_softness(params: Mapping[str, Any], drive: Drive | None = None) -> float:
+    """Softness b [N] of the span ends' slack with ``torsional.wrap_statics`` (the span tension
+    is b ln(1 + e^(T_raw / b)); :func:`~chainmodel.models.wrap_statics.wrap_fit`), else 0."""
+    if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
+        return 0.0
+    from .wrap_statics import wrap_fit
+    try:
+        return wrap_fit(drive, params).softness
+    except ValueError:
+        return 0.0
 
 
 def loose_chain_error(drive: Drive, params: Mapping[str, Any]) -> str | None:

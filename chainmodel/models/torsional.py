@@ -47,7 +47,8 @@ from . import rk4_loop as L
 from . import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
-from .static_tension import seat_series_compliance, seat_stiffness, static_span_tension
+from .static_tension import (seat_series_compliance, seat_stiffness, static_span_tension,
+                             wrap_softness)
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -143,6 +144,7 @@ class TorsionalModel(Model):
         P[S.P_C_LINK] = p["chain.link_damping"]
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
+        P[S.P_SOFT] = wrap_softness(self.params, self.drive)
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]

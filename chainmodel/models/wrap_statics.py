@@ -1,24 +1,33 @@
 """Levels 0-2's span ends from level 3's statics (issue 21 items 3-4; docs/reduced_models.md,
 "One wrap and one static tension from level 3's statics").
 
-Levels 1-2 hold each span between its sprockets with the law T = (l - n p_free - f) / (n / k + c)
-(spans.py ``_tension``): n links of stiffness k in series with an end compliance c, and a free
-length f the ends give away. Here (c, f) are fitted to the static equilibrium of level 3's own
-chain (:mod:`chainmodel.models.multibody_statics`: the same rollers, links, seats with their
-clearance and flanks, gravity), condensed onto the driven sprocket's rotation (a Guyan
-reduction of the chain's statics onto the sprocket coordinates, driver held at angle 0):
+Levels 1-2 hold each span between its sprockets with the law T_raw = (l - n p_free - f) /
+(n / k + c) (spans.py ``_tension``): n links of stiffness k in series with an end compliance c,
+and a free length f the ends give away. With ``torsional.wrap_statics`` the span tension is
+T = (T_raw + sqrt(T_raw^2 + 4 a^2)) / 2: the raw law well above a floor a, a where the raw law
+reaches zero, a^2 / |T_raw| below it. All three are fitted to the static equilibrium of level
+3's own chain (:mod:`chainmodel.models.multibody_statics`: the same rollers, links, seats with
+their clearance and flanks, gravity), condensed onto the driven sprocket's rotation (driver held
+at angle 0):
 
 * the driven sprocket's torsional stiffness K_3 = 2 dM / |phi2(+dM) - phi2(-dM)|, the secant
-  over a load step dM = ``LOAD_STEP`` T_0 R_o either way (tension steps of about a tenth of the
-  static tension per span), and level 1's R_o^2 sum_spans 1 / (n_s / k + c) = K_3 gives c
-  (n_s the tooth-period-mean link counts level 1 uses);
+  over a load step dM = ``LOAD_STEP`` T_0 R_o either way, and level 1's
+  R_o^2 sum_spans s_s / (n_s / k + c) = K_3 gives c (n_s the tooth-period-mean link counts
+  level 1 uses, s_s the floor's slope dT / dT_raw at rest);
+* the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
+  at which the raw law's slack span would carry SLACK_SHARE T_0: level 1's law at rest under
+  M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
+  3's span tensions' sum rises under load; docs/reduced_models.md); a = 0 where the floor cannot
+  match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
+  found;
 * the static span tension T_0 (mean of the two spans' middle links at rest, no load) and
-  level 0-2's static law T_0 = (X - 2 f) / (D + 2 c) (static_tension._static_numerator's X, D
-  without seats) give f.
+  levels 0-2's static law T_0 = floor((X - 2 f) / (D + 2 c)) (static_tension._static_numerator's
+  X, D without seats) give f.
 
 So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
-tension decay around the wrap included, and level 1's driven-sprocket mode the condensed
-stiffness of level 3's chain. Computed once per (drive, parameters) (three static solves).
+tension decay around the wrap included, level 1's driven-sprocket stiffness is level 3's
+condensed one and its loaded split at rest follows level 3's. Computed once per (drive,
+parameters): seven static solves.
 """
 
 from __future__ import annotations
@@ -30,10 +39,12 @@ from typing import Any, Mapping
 from ..geometry import Drive
 from .multibody_statics import solve_statics, static_state
 
-__all__ = ["WrapFit", "wrap_fit", "LOAD_STEP"]
+__all__ = ["WrapFit", "wrap_fit", "softplus", "LOAD_STEP", "SLACK_SHARE"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
+#: the loaded split is fitted where a linear law's slack span would carry this share of T_0
+SLACK_SHARE = 0.25
 
 _CACHE: dict = {}
 
@@ -52,6 +63,8 @@ class WrapFit:
     upper: float
     lower: float
     solves_wall: float
+    softness: float = 0.0
+    loaded_slack: float = float("nan")
 
 
 def _key(drive: Drive, params: Mapping[str, Any]):
@@ -91,27 +104,105 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     k = p3["chain.link_stiffness"]
     g = tooth_period_geometry(drive, 100)
     n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
-    target = k3 / (ro * ro)
-
-    def span_stiffness(c):
-        return 1.0 / (n_up / k + c) + 1.0 / (n_low / k + c)
-
-    # span_stiffness falls with c; bracket from just above -min(n)/k
-    lo = -0.999 * min(n_up, n_low) / k
-    hi = max(n_up, n_low) / k
-    while span_stiffness(hi) > target:
-        hi *= 4.0
-    from scipy.optimize import brentq
-    c = float(brentq(lambda cc: span_stiffness(cc) - target, lo, hi, xtol=1e-18, rtol=1e-13))
     excess, links = _rest_geometry(drive)
     x = excess + links * p3["chain.pretension"] / k
-    f = 0.5 * (x - t0 * (links / k + 2.0 * c))
-    fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower,
-                  rest.wall + plus.wall + minus.wall)
+    wall = rest.wall + plus.wall + minus.wall
+    # the loaded split: level 3's slack span at a load that would take a linear law's slack
+    # span to SLACK_SHARE of T_0
+    m_b = (1.0 - SLACK_SHARE) * 2.0 * t0 * ro
+    slack3 = None
+    try:
+        state = rest.state
+        for share in (0.25, 0.5, 0.75, 1.0):
+            sol = solve_statics(model, 0.0, share * m_b, start=state)
+            state = sol.state
+            wall += sol.wall
+        slack3 = min(sol.tension_upper, sol.tension_lower)
+    except ValueError:   # no loaded equilibrium found: no softness
+        slack3 = None
+    b = 0.0
+    c = _compliance(k3 / (ro * ro), n_up, n_low, k, 1.0, 1.0)
+    for _ in range(4):
+        t0_lin = _linear(t0, b)
+        su, sl = _slope(t0_lin, b), _slope(t0_lin, b)
+        c = _compliance(k3 / (ro * ro), n_up, n_low, k, su, sl)
+        if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, m_b / ro):
+            break
+        b = _softness(t0, slack3, c, n_up, n_low, k, m_b / ro)
+    t0_lin = _linear(t0, b)
+    f = 0.5 * (x - t0_lin * (links / k + 2.0 * c))
+    fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
+                  float("nan") if slack3 is None else slack3)
     if len(_CACHE) > 256:
         _CACHE.clear()
     _CACHE[key] = fit
     return fit
+
+
+def softplus(raw: float, b: float) -> float:
+    """The span law's floor under the slack span, (raw + sqrt(raw^2 + 4 b^2)) / 2 (raw itself
+    for b = 0, clamped at 0; spans.py ``_tension``)."""
+    if b <= 0.0:
+        return max(raw, 0.0)
+    r = math.sqrt(raw * raw + 4.0 * b * b)
+    return 0.5 * (raw + r) if raw > 0 else 2.0 * b * b / (r - raw)
+
+
+def _linear(t0, b):
+    """The raw (linear) tension whose floored value is t0: t0 - b^2 / t0."""
+    if b <= 0.0:
+        return t0
+    return t0 - b * b / t0
+
+
+def _slope(raw, b):
+    return 1.0 if b <= 0.0 else 0.5 * (1.0 + raw / math.sqrt(raw * raw + 4.0 * b * b))
+
+
+def _compliance(target, n_up, n_low, k, su, sl):
+    """c with su / (n_up / k + c) + sl / (n_low / k + c) = target (span stiffness per R_o^2)."""
+    from scipy.optimize import brentq
+
+    def stiff(c):
+        return su / (n_up / k + c) + sl / (n_low / k + c)
+
+    lo = -0.999 * min(n_up, n_low) / k
+    hi = max(n_up, n_low) / k
+    while stiff(hi) > target:
+        hi *= 4.0
+    return float(brentq(lambda cc: stiff(cc) - target, lo, hi, xtol=1e-18, rtol=1e-13))
+
+
+def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
+    """The slack span's tension of the level-1 law at rest under a load whose tension
+    difference is dt: both spans' raw tensions move by their stiffness times one rotation,
+    softplus(t0 + k_u u) - softplus(t0 - k_l u) = dt."""
+    from scipy.optimize import brentq
+    ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
+
+    def diff(u):
+        return softplus(t0_lin + ku * u, b) - softplus(t0_lin - kl * u, b) - dt
+
+    hi = dt / min(ku, kl)
+    while diff(hi) < 0:
+        hi *= 2.0
+    u = brentq(diff, 0.0, hi, xtol=1e-15)
+    return softplus(t0_lin - kl * u, b)
+
+
+def _softness(t0, slack3, c, n_up, n_low, k, dt):
+    """b with which the level-1 law's slack span under dt is level 3's slack3 (T_0 kept)."""
+    from scipy.optimize import brentq
+
+    def err(b):
+        return _split_slack(_linear(t0, b), b, c, n_up, n_low, k, dt) - slack3
+
+    hi = max(slack3, 1e-3)
+    while err(hi) < 0 and hi < 1e3 * t0:
+        hi *= 2.0
+    if err(hi) < 0:
+        return 0.0
+    return float(brentq(err, 1e-9 * t0, hi, xtol=1e-9 * t0))
 
 
 def _loaded(model, rest, load):
