@@ -5,11 +5,11 @@ docs/reduced_models.md "One wrap and one static tension from level 3's statics")
   sag): levels 0, 1 and 2 report the static tension level 3's dynamic model holds at rest when
   started from the static equilibrium (0.1 s at rest, its own force law deciding), within 5 %;
   level 1 run at rest holds it too;
-* item 3: C1's driven-sprocket mode (ring-down after a sudden start to 5 rpm) at level 2
-  within 3 % of level 3's and of the two-inertia estimate with the condensed stiffness K_3
-  (level 1: 3.2 % below, a strict xfail); xu2010's at levels 1 and 2 with the joint dampers
-  off (with them on, level 3's 600 Hz mode is stiffened by them, which no static wrap holds:
-  docs/reduced_models.md); xu2010's loaded split at rest against level 3's statics.
+* item 3: C1's driven-sprocket mode (ring-down after a sudden start to 5 rpm) at levels 1 and
+  2 within 3 % of level 3's and of the two-inertia estimate with the condensed stiffness K_3;
+  xu2010's with the joint dampers off (with them on, level 3's 600 Hz mode is stiffened by
+  them, which no static wrap holds: docs/reduced_models.md); xu2010's loaded split, turned
+  quasi-statically, against level 3's statics.
 """
 
 from __future__ import annotations
@@ -94,10 +94,7 @@ def _estimate_k3(name, **kw):
 
 
 @pytest.mark.parametrize("name,kw,level", [
-    ("C1", {}, 2),
-    pytest.param("C1", {}, 1, marks=pytest.mark.xfail(
-        strict=True, reason="C1 at level 1 on level 3's wrap rings at 23.4 Hz, 3.2 % below level "
-        "3 (24.2 Hz; the linear wrap without the slack floor: 24.1 Hz); docs/reduced_models.md")),
+    ("C1", {}, 1), ("C1", {}, 2),
     ("xu2010", {"chain_joint_damping": 0.0}, 1),
     ("xu2010", {"chain_joint_damping": 0.0}, 2)])
 def test_torsional_mode_levels_1_2_on_level3s_wrap(name, kw, level):
@@ -111,16 +108,24 @@ def test_torsional_mode_levels_1_2_on_level3s_wrap(name, kw, level):
 
 
 @pytest.mark.parametrize("load", [20.0, 43.2])
-def test_xu2010_loaded_split_at_rest_follows_level3s_statics(load):
-    """Level 1 held at rest under a load (driver held, the driven sprocket damped until it
-    settles) against level 3's static equilibrium under the same load: the tight span within
-    3 %, the slack span within 15 % (the seat ladder: +21-22 %). The floor is fitted at
-    0.75 x 2 T_0 R_o (34 N m), neither of these loads."""
-    s3 = static_state(load_scene("xu2010", fidelity=3).model(), 0.0, load)
-    r = chainmodel.simulate("xu2010", fidelity=1, input_speed_rpm=0.0, load_torque=load,
-                            ramp_time=1.0, duration=3.0, output_interval=1e-3,
-                            input_shaft_rigid=True, driven_damping=20.0, **ON)
-    tight = r["tight_span.tension"][-200:].mean()
-    slack = r["slack_span.tension"][-200:].mean()
-    assert tight == pytest.approx(s3.tension_upper, rel=0.03)
-    assert slack == pytest.approx(s3.tension_lower, rel=0.15)
+def test_xu2010_quasi_static_split_follows_level3s_statics(load):
+    """Level 1 turned at 1 rpm under a load (driver held by a rigid shaft, the driven sprocket
+    damped so that it follows quasi-statically; its damping torque taken off the load), mean
+    over the last tooth period, against the mean of level 3's static equilibria under the same
+    load at 8 driver positions over a tooth: the tight span within 3 %, the slack span within
+    12 % (the seat ladder: +20 % and +26 %). The floor is fitted at 34 N m (0.75 x 2 T_0 R_o),
+    neither of these loads."""
+    model = load_scene("xu2010", fidelity=3).model()
+    tooth = 2 * math.pi / model.drive.n_driver
+    sols = [static_state(model, tooth * j / 8, load) for j in range(8)]
+    t3 = np.mean([s.tension_upper for s in sols])
+    s3 = np.mean([s.tension_lower for s in sols])
+    c2, w_in = 20.0, 2 * math.pi / 60
+    r = chainmodel.simulate("xu2010", fidelity=1, input_speed_rpm=1.0,
+                            load_torque=load - c2 * w_in * model.drive.tooth_ratio,
+                            ramp_time=1.0, duration=1.0 + 1.0 + 60.0 / model.drive.n_driver,
+                            output_interval=1e-3, input_shaft_rigid=True, driven_damping=c2,
+                            **ON)
+    m = r.time >= 2.0
+    assert r["tight_span.tension"][m].mean() == pytest.approx(t3, rel=0.03)
+    assert r["slack_span.tension"][m].mean() == pytest.approx(s3, rel=0.12)

@@ -15,8 +15,8 @@ at angle 0):
   R_o^2 sum_spans s_s / (n_s / k + c) = K_3 gives c (n_s the tooth-period-mean link counts
   level 1 uses, s_s the floor's slope dT / dT_raw at rest);
 * the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
-  at which the raw law's slack span would carry SLACK_SHARE T_0: level 1's law at rest under
-  M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
+  at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
+  driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
   3's span tensions' sum rises under load; docs/reduced_models.md); a = 0 where the floor cannot
   match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
   found;
@@ -27,7 +27,7 @@ at angle 0):
 So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
 tension decay around the wrap included, level 1's driven-sprocket stiffness is level 3's
 condensed one and its loaded split at rest follows level 3's. Computed once per (drive,
-parameters): seven static solves.
+parameters): 3 + 4 x 5 static solves.
 """
 
 from __future__ import annotations
@@ -45,6 +45,8 @@ __all__ = ["WrapFit", "wrap_fit", "softplus", "LOAD_STEP", "SLACK_SHARE"]
 LOAD_STEP = 0.2
 #: the loaded split is fitted where a linear law's slack span would carry this share of T_0
 SLACK_SHARE = 0.25
+#: driver positions over a tooth period at which the loaded split is solved (their mean)
+ANGLES = 4
 
 _CACHE: dict = {}
 
@@ -112,13 +114,21 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     m_b = (1.0 - SLACK_SHARE) * 2.0 * t0 * ro
     slack3 = None
     try:
-        state = rest.state
-        for share in (0.25, 0.5, 0.75, 1.0):
-            sol = solve_statics(model, 0.0, share * m_b, start=state)
-            state = sol.state
-            wall += sol.wall
-        slack3 = min(sol.tension_upper, sol.tension_lower)
-    except ValueError:   # no loaded equilibrium found: no softness
+        # the mean over a tooth period of the driver (ANGLES positions), as level 1's
+        # tooth-period-mean link counts see it
+        slacks = []
+        for j in range(ANGLES):
+            angle = 2.0 * math.pi / drive.n_driver * j / ANGLES
+            start = rest if j == 0 else static_state(model, angle)
+            state = start.state
+            wall += start.wall if j else 0.0
+            for share in (0.25, 0.5, 0.75, 1.0):
+                sol = solve_statics(model, angle, share * m_b, start=state)
+                state = sol.state
+                wall += sol.wall
+            slacks.append(min(sol.tension_upper, sol.tension_lower))
+        slack3 = float(np.mean(slacks))
+    except ValueError:   # no loaded equilibrium found: no floor
         slack3 = None
     b = 0.0
     c = _compliance(k3 / (ro * ro), n_up, n_low, k, 1.0, 1.0)
