@@ -102,6 +102,8 @@ class MultibodyModel(Model):
     #: (made of one pass over the positions and two over the velocities) at 90 % of the
     #: stable step (docs/multibody.md, benchmark in docs/performance.md)
     preferred_method = "verlet"
+    #: the force kernels (multibody_statics evaluates the same force law through them)
+    kernels = K
 
     def __init__(self, drive: Drive, params: Mapping[str, Any], *, use_numba: bool | None = None):
         super().__init__(drive, params)

@@ -86,7 +86,7 @@ class _Problem:
     """Residual, potential and coloured Jacobian of the static problem of one model."""
 
     def __init__(self, model, driver_angle: float, load: float):
-        from .multibody import K   # level 3's own kernels, wherever MultibodyModel takes them
+        K = model.kernels   # level 3's own force kernels
         self.K = K
         self.model = model
         self.M = M = model.M
@@ -275,7 +275,7 @@ def _span_tensions(model, x) -> tuple[float, float]:
 
 
 def _spans(model, q, spans):
-    from .multibody import K
+    K = model.kernels
     fn = K.spans_numba if model.use_numba else K.spans_numpy
     fn(q, model.ws.dist, model.ws.side, model.ws.seat_angle, model._engaged_tol, model.P,
        model._mids, spans)
@@ -296,7 +296,7 @@ def sagged_layout(model, driver_angle: float = 0.0) -> np.ndarray:
     free = ~engaged.any(axis=0)
     if free.all() or not free.any():
         return x
-    from .multibody import K
+    K = model.kernels
     # the wrapped rollers at the bottom of their seats (towards the sprocket's centre by the
     # clearance), where a chain's tension holds them: laid on the pitch circle they touch
     # nothing, and a chain without pretension would float with no stiffness at all

@@ -16,7 +16,7 @@ from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
 __all__ = ["static_span_tension", "seat_stiffness", "seat_series_compliance", "seated_tension",
-           "pretension_error", "loose_chain_error", "wrap_softness"]
+           "pretension_error", "loose_chain_error"]
 
 
 def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
@@ -63,18 +63,7 @@ def seat_series_compliance(params: Mapping[str, Any], drive: Drive | None = None
     they carry): the end moves towards the span by s + (T - T_w) / K_seat, s = R_t - R_r the
     roller-seat clearance. Per span (one end on each sprocket) that is the compliance
     2 / K_seat and the free length 2 s - (T_w,driver + T_w,driven) / K_seat; without ``drive``
-    the wrapped links are taken as unstrained (T_w = 0).
-
-    With ``torsional.wrap_statics`` (and a drive with a link count) both come instead from
-    level 3's statics of the drive (:func:`~chainmodel.models.wrap_statics.wrap_fit`; the
-    ladder where level 3 has no static equilibrium)."""
-    if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
-        from .wrap_statics import wrap_fit
-        try:
-            fit = wrap_fit(drive, params)
-            return fit.compliance, fit.free_length
-        except ValueError:   # level 3 finds no equilibrium of this drive: the seat ladder
-            pass
+    the wrapped links are taken as unstrained (T_w = 0)."""
     if not params["torsional.seat_compliance"]:
         return 0.0, 0.0
     k_seat = seat_stiffness(params["contact.stiffness"], params["chain.link_stiffness"])
@@ -123,23 +112,7 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     if drive.links is None:
         return params["chain.pretension"]
     x, d = _static_numerator(drive, params)
-    b = wrap_softness(params, drive)
-    if b > 0.0:
-        from .wrap_statics import softplus
-        return softplus(x / d, b)
     return max(0.0, x / d)
-
-
-def wrap_softness(params: Mapping[str, Any], drive: Drive | None = None) -> float:
-    """Softness b [N] of the span ends' slack with ``torsional.wrap_statics`` (the span tension
-    is b ln(1 + e^(T_raw / b)); :func:`~chainmodel.models.wrap_statics.wrap_fit`), else 0."""
-    if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
-        return 0.0
-    from .wrap_statics import wrap_fit
-    try:
-        return wrap_fit(drive, params).softness
-    except ValueError:
-        return 0.0
 
 
 def loose_chain_error(drive: Drive, params: Mapping[str, Any]) -> str | None:

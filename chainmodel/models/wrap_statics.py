@@ -38,8 +38,10 @@ from typing import Any, Mapping
 
 from ..geometry import Drive
 from .multibody_statics import solve_statics, static_state
+from . import static_tension as ST
 
-__all__ = ["WrapFit", "wrap_fit", "softplus", "LOAD_STEP", "SLACK_SHARE"]
+__all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
+           "SLACK_SHARE"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -82,7 +84,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     if hit is not None:
         return hit
     from .multibody import MultibodyModel
-    from .static_tension import _rest_geometry
+    _rest_geometry = ST._rest_geometry
     from ..kinematics.wrapping import tooth_period_geometry
     import numpy as np
     from .. import parameters as PRM
@@ -147,6 +149,34 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         _CACHE.clear()
     _CACHE[key] = fit
     return fit
+
+
+def span_ends(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float, float]:
+    """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
+    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count), else - or
+    where level 3 has no static equilibrium - the seat ladder
+    (:func:`~chainmodel.models.static_tension.seat_series_compliance`) and no floor."""
+    if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
+        try:
+            fit = wrap_fit(drive, params)
+            return fit.compliance, fit.free_length, fit.softness
+        except ValueError:
+            pass
+    c, f = ST.seat_series_compliance(params, drive)
+    return c, f, 0.0
+
+
+def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
+    """Levels 0-2's static span tension [N]: :func:`~chainmodel.models.static_tension.
+    static_span_tension` (the seat ladder), or with ``torsional.wrap_statics`` the same law on
+    :func:`span_ends`' (c, f), floored: level 3's static tension."""
+    if drive.links is None or not params.get("torsional.wrap_statics"):
+        return ST.static_span_tension(drive, params)
+    c, f, a = span_ends(drive, params)
+    k = params["chain.link_stiffness"]
+    excess, links = ST._rest_geometry(drive)
+    raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
+    return softplus(raw, a)
 
 
 def softplus(raw: float, b: float) -> float:
