@@ -224,6 +224,13 @@ PARAMETERS: tuple[Parameter, ...] = (
        "of seat springs contact.stiffness and links, loaded by the span's tension less the "
        "wrapped links' own), plus the roller-seat clearance (docs/reduced_models.md)",
        kind=bool, levels=(0, 1, 2)),
+    _p("torsional.wrap_statics", False, "",
+       "at levels 0-2 take each span end's compliance, free length and a floor under the slack "
+       "span from level 3's static equilibrium of the same drive (its rollers, links, seats with "
+       "clearance and flanks, gravity), condensed onto the driven sprocket: the static tension "
+       "is level 3's, the driven sprocket's stiffness its condensed one and the loaded split at "
+       "rest follows level 3's (docs/reduced_models.md, \"One wrap\"); off, "
+       "torsional.seat_compliance decides", kind=bool, levels=(0, 1, 2)),
     _p("torsional.mean_link_compliance", True, "",
        "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
        "tooth-period-mean link count n, while its stretch follows the current count: the tension "

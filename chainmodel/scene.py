@@ -189,7 +189,8 @@ class _Slack(Exception):
 def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float) -> float:
     """Model.static_tension() of ``level`` with ``chain.pretension = pretension``; 0 where the
     pretension leaves the chain slack (which the models refuse to build)."""
-    from .models.kinematic import pretension_error, static_span_tension
+    from .models.kinematic import pretension_error
+    from .models.wrap_statics import static_span_tension
     trial = dict(params, **{"chain.pretension": pretension})
     if pretension > 0 and pretension_error(drive, trial) is not None:
         return 0.0

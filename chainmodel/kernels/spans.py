@@ -201,7 +201,8 @@ P_K_LINK, P_C_LINK, P_P_FREE, P_SEAT_C, P_SEAT_SLACK, P_RIGID, P_K_SHAFT, P_C_SH
 P_D2, P_J11, P_J12, P_J22, P_RHOA, P_MODES, P_LBAR_U, P_LBAR_L = range(8, 16)
 P_ZETA, P_W1_U, P_W1_L, P_IMPULSE, P_REF_U, P_REF_L, P_GN_U, P_GN_L, P_PITCH = range(16, 25)
 P_NBAR_U, P_NBAR_L = range(25, 27)
-P_SIZE = 27
+P_SOFT = 27          # floor a [N] under the slack span (torsional.wrap_statics; 0: none)
+P_SIZE = 28
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
@@ -235,7 +236,7 @@ def _coriolis(k, j):
 
 @jit_noalloc
 def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
-             seat_slack, length_rate, links_compliance):
+             seat_slack, length_rate, links_compliance, soft=0.0):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
     change marks the switch: min(k delta, T_raw), continuous through both ways of going slack.
 
@@ -247,6 +248,12 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link,
     delta = length + stretch_modal - links * p_free - seat_slack
     raw = k_eff * delta + (c_link / links_compliance) * (length_rate + stretch_rate)
     switch = min(k_eff * delta, raw)
+    if soft > 0.0:
+        # the wrap's floor under the slack span (wrap_statics.py): the hyperbola
+        # (T_raw + sqrt(T_raw^2 + 4 a^2)) / 2, T_raw + a^2 / T_raw well above a, a at zero
+        if raw > 0.0:
+            return 0.5 * (raw + math.sqrt(raw * raw + 4.0 * soft * soft)), switch
+        return 2.0 * soft * soft / (math.sqrt(raw * raw + 4.0 * soft * soft) - raw), switch
     if switch > 0.0:
         return raw, switch
     return 0.0, switch
@@ -346,9 +353,9 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     nc_u = nu if P[P_NBAR_U] <= 0.0 else P[P_NBAR_U]
     nc_l = nl if P[P_NBAR_L] <= 0.0 else P[P_NBAR_L]
     t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_u, nc_u)
+                        P[P_SEAT_SLACK], rate_u, nc_u, P[P_SOFT])
     t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_l, nc_l)
+                        P[P_SEAT_SLACK], rate_l, nc_l, P[P_SOFT])
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
     j11 = P[P_J11]

@@ -122,7 +122,8 @@ class KinematicModel(Model):
 
     @cached_property
     def _static_tension(self) -> float:
-        return static_span_tension(self.drive, self.params)
+        from .wrap_statics import static_span_tension as with_wrap   # the seat ladder or level 3's
+        return with_wrap(self.drive, self.params)
 
     def static_tension(self) -> float:
         return self._static_tension

@@ -464,21 +464,41 @@ class MultibodyModel(Model):
 
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N]: the mean of the two span tensions
-        (measured as the outputs are) after the chain has settled from the initial layout with
-        the driver held by the input shaft at angle 0 and no load (dynamic relaxation with
-        extra link damping; the equilibrium does not depend on damping)."""
+        (measured as the outputs are, the middle link of each span) at the static equilibrium
+        of this model's own force law with the driver held at angle 0, gravity included
+        (:func:`~chainmodel.models.multibody_statics.static_state`; docs/multibody.md,
+        "Statics"). Where Newton finds no equilibrium (a drive level 3 cannot hold, such as a
+        3-tooth sprocket that skips teeth) it falls back to the tension after a damped 60 ms
+        relaxation from the initial layout."""
         return self._static[0]
 
+    def static_solution(self):
+        """The :class:`~chainmodel.models.multibody_statics.StaticSolution` behind
+        :meth:`static_tension` (driver at angle 0, no load; cached per drive and parameters);
+        None where the statics found no equilibrium and the tension is the settled one."""
+        return self._static[3]
+
     @cached_property
-    def _static(self) -> tuple[float, float, float]:
+    def _static(self):
         key = (self.drive, tuple(sorted(self.params.items())))
         if key not in _STATIC_CACHE:
             if len(_STATIC_CACHE) > 64:
                 _STATIC_CACHE.clear()
-            _STATIC_CACHE[key] = self._settle()
+            from .multibody_statics import static_state
+            try:
+                sol = static_state(self)
+                _STATIC_CACHE[key] = (sol.mean_tension, sol.tension_upper, sol.tension_lower,
+                                      sol)
+            except ValueError:
+                # no static equilibrium found (a drive level 3 cannot hold, e.g. a 3-tooth
+                # sprocket that skips): the settled state of a damped 60 ms relaxation
+                _STATIC_CACHE[key] = self._settle() + (None,)
         return _STATIC_CACHE[key]
 
     def _settle(self) -> tuple[float, float, float]:
+        """(mean, upper, lower) span tension after the chain has settled for 60 ms from the
+        initial layout with extra link damping, the driver held at 0 and no load (the
+        fallback of :meth:`static_tension` where the statics find no equilibrium)."""
         relax = dict(self.params)
         m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
         relax["chain.link_damping"] = max(relax["chain.link_damping"], 0.25 * math.sqrt(k * m))

@@ -47,7 +47,8 @@ from ..kernels import rk4_loop as L
 from ..kernels import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
-from .static_tension import seat_series_compliance, seat_stiffness, static_span_tension
+from .static_tension import seat_stiffness
+from .wrap_statics import span_ends, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -133,8 +134,9 @@ class TorsionalModel(Model):
     def series_compliance(self) -> tuple[float, float]:
         """(extra compliance per span [m/N], extra free length per span [m]) from the seats
         (option ``torsional.seat_compliance``; :func:`~chainmodel.models.kinematic.
-        seat_series_compliance`)."""
-        return seat_series_compliance(self.params, self.drive)
+        seat_series_compliance`), or with ``torsional.wrap_statics`` from level 3's statics
+        (:func:`~chainmodel.models.wrap_statics.span_ends`)."""
+        return span_ends(self.drive, self.params)[:2]
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -143,6 +145,7 @@ class TorsionalModel(Model):
         P[S.P_C_LINK] = p["chain.link_damping"]
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
+        P[S.P_SOFT] = span_ends(self.drive, self.params)[2]
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]

@@ -1,0 +1,359 @@
+"""Static equilibrium of level 3's chain (issue 21 items 3-4; docs/multibody.md, "Statics").
+
+Every roller position and the driven sprocket's rotation with the driver held at an angle, the
+driven sprocket loaded by a torque M (0: free, its torque balance), gravity included, under the
+SAME force law as the dynamic level 3 at zero velocity: the residual is the compiled
+accelerations of :class:`~chainmodel.models.multibody.MultibodyModel` times the masses
+(m a of each roller, I_2 a_2 of the driven sprocket), so an equilibrium found here is an
+equilibrium of the dynamic model (tests/test_multibody_statics.py starts it there and watches it
+stay).
+
+The forces are conservative at rest (links, roller-seat penalty contacts, gravity, a constant
+load torque: seed 003 eq A2's U plus the load's work), so the residual is minus the gradient of
+a potential V and its Jacobian is minus V's Hessian, symmetric. Newton on it:
+
+* the Jacobian by finite differences with a colouring of the columns: a roller's position moves
+  the forces on itself and its two link neighbours (the joint dampers act only on velocities),
+  so rollers three apart share no row and 2 x 3 (+ up to 2 for the ring's closure) perturbed
+  evaluations give every roller column; the driven sprocket's column is one more evaluation,
+  and its row is that column transposed (symmetry);
+* the step solves (H + mu D) du = F, H = -J, with mu raised (Levenberg) until H + mu D
+  factorises and the step descends; D is H's diagonal (floored), which regularises the zero
+  stiffness of a roller lying loose in its seat with its links inside the pin-bushing play;
+* a backtracking line search, the step taken when it lowers V (Armijo) or the residual's
+  norm, each roller's move (and the driven sprocket's at its pitch radius) capped at a tenth
+  of a pitch;
+* the start (:func:`sagged_layout`): the wrapped rollers at the bottom of their seats and each
+  span longer than its chord hung as the parabola of its length (from the straight-span layout
+  a slack chain touches no seat and floats with no stiffness at all).
+
+Converged when the largest roller force is below ``tol`` (a thousandth) of a roller's weight
+(m g; without gravity 1e-2 tol of the largest link tension at the start) and the driven sprocket's torque
+below the same times its pitch radius.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix, csc_matrix
+from scipy.sparse.linalg import splu
+
+from ..kernels import multibody_layout as K
+from ..kernels.multibody_forces import accel, link_potential
+from ..kernels.multibody_outputs import span_ends
+from .base import Inputs
+
+__all__ = ["StaticSolution", "solve_statics", "static_state"]
+
+#: relative force tolerance (of the weight per roller) of a converged solution
+TOLERANCE = 1e-3
+#: finite-difference step [m] (and rad times the pitch radius) of the Jacobian: the penalty
+#: contacts are piecewise quadratic, so the step only needs to be well above rounding
+FD_STEP = 1e-9
+DEBUG = False
+
+
+@dataclass
+class StaticSolution:
+    """A static equilibrium of level 3's chain.
+
+    state: the full state of :class:`MultibodyModel` (velocities zero), the driver at
+    ``driver_angle``; tension_upper / tension_lower: the axial force of each span's middle link
+    (measured as level 3's outputs are) [N]; residual: largest roller force [N] at the solution;
+    torque_residual: driven sprocket's torque [N m]; iterations: Newton steps; wall: seconds."""
+    state: np.ndarray
+    driver_angle: float
+    load: float
+    tension_upper: float
+    tension_lower: float
+    residual: float
+    torque_residual: float
+    iterations: int
+    wall: float
+    converged: bool
+
+    @property
+    def driven_angle(self) -> float:
+        return float(self.state[1])
+
+    @property
+    def mean_tension(self) -> float:
+        return 0.5 * (self.tension_upper + self.tension_lower)
+
+
+class _Problem:
+    """Residual, potential and coloured Jacobian of the static problem of one model."""
+
+    def __init__(self, model, driver_angle: float, load: float):
+        self.model = model
+        self.M = M = model.M
+        self.n = 2 + 2 * M
+        P = model.P.copy()
+        P[K.I_RIGID] = 1.0          # the driver held at its angle (tau): a[0] = tau''
+        self.P = P
+        self.ws = K.Workspace(M)
+        self.tau = float(driver_angle)
+        self.load = float(load)
+        self.m = P[K.I_M]
+        self.I2 = P[K.I_I2]
+        self.v0 = np.zeros(self.n)
+        self.q = np.zeros(self.n)
+        self.q[0] = self.tau
+        self.acc = np.zeros(self.n)
+        self.fn = accel     # level 3's own force law
+        self.evaluations = 0
+        # column colouring of the rollers: roller i moves rows i-1, i, i+1 (cyclic)
+        base = M - M % 3
+        colour = np.empty(M, np.int64)
+        colour[:base] = np.arange(base) % 3
+        colour[base:] = 3 + np.arange(M - base)
+        self.groups = [np.flatnonzero(colour == c) for c in range(int(colour.max()) + 1)]
+        # sparse pattern: unknowns u = [phi2, x0, y0, x1, ...] (index 0 the driven sprocket)
+        rows, cols = [], []
+        for i in range(M):
+            for j in (i - 1, i, i + 1):
+                jj = j % M
+                for a in range(2):
+                    for b in range(2):
+                        rows.append(1 + 2 * i + a)
+                        cols.append(1 + 2 * jj + b)
+        self._rows_rr = np.array(rows)
+        self._cols_rr = np.array(cols)
+
+    def set(self, u):
+        self.q[1] = u[0]
+        self.q[2:] = u[1:]
+
+    def forces(self, u) -> np.ndarray:
+        """F(u) = [driven torque balance, m a of every roller] at zero velocity."""
+        self.set(u)
+        a, status, _ = self.fn(self.q, self.v0, self.tau, 0.0, 0.0, self.load, self.P, self.ws,
+                               self.acc)
+        self.evaluations += 1
+        f = np.empty(self.n - 1)
+        f[0] = self.I2 * a[1]
+        f[1:] = self.m * a[2:]
+        return f
+
+    def potential(self, u) -> float:
+        """V(u): links, contacts, gravity and the load's potential load * phi2 [J]."""
+        self.set(u)
+        self.fn(self.q, self.v0, self.tau, 0.0, 0.0, self.load, self.P, self.ws, self.acc)
+        z = u[1:].reshape(self.M, 2)
+        L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
+        links = float(np.sum(link_potential(L - self.P[K.I_L0], self.P[K.I_K], self.P[K.I_GAP])))
+        pen = np.where(self.ws.side > 0, self.ws.fcon / self.P[K.I_KC], 0.0)
+        contact = 0.5 * self.P[K.I_KC] * float(pen @ pen)
+        grav = -self.m * float(np.sum(z[:, 0] * self.P[K.I_GX] + z[:, 1] * self.P[K.I_GY]))
+        return links + contact + grav + self.load * float(u[0])
+
+    def jacobian(self, u, f0) -> csc_matrix:
+        """dF/du (symmetric: -V's Hessian) by coloured forward differences."""
+        M, h = self.M, FD_STEP
+        vals = np.empty(self._rows_rr.shape[0])
+        # roller columns
+        blk = np.zeros((M, 3, 2, 2))          # [roller i, neighbour slot j-i+1, row a, col b]
+        for b in range(2):
+            for g in self.groups:
+                up = u.copy()
+                up[1 + 2 * g + b] += h
+                df = (self.forces(up) - f0) / h
+                dfr = df[1:].reshape(M, 2)
+                for slot, off in enumerate((-1, 0, 1)):
+                    rows = (g + off) % M            # rows moved by perturbed roller g
+                    # row i = g + off sees column g at neighbour slot (g - i) + 1 = 1 - off
+                    blk[rows, 1 - off, :, b] = dfr[rows]
+        vals[:] = blk.reshape(-1)
+        # driven sprocket column (and row, by symmetry)
+        hp = h / max(self.P[K.I_R2], 1e-3)
+        up = u.copy()
+        up[0] += hp
+        col = (self.forces(up) - f0) / hp
+        nz = np.flatnonzero(col[1:]) + 1
+        rows = np.concatenate([self._rows_rr, nz, np.zeros_like(nz), [0]])
+        cols = np.concatenate([self._cols_rr, np.zeros_like(nz), nz, [0]])
+        data = np.concatenate([vals, col[nz], col[nz], [col[0]]])
+        J = coo_matrix((data, (rows, cols)), shape=(self.n - 1, self.n - 1)).tocsc()
+        return 0.5 * (J + J.T)    # symmetric up to the differences' rounding
+
+
+def solve_statics(model, driver_angle: float = 0.0, load: float = 0.0, start=None,
+                  tol: float = TOLERANCE, max_iter: int = 200) -> StaticSolution:
+    """Static equilibrium of ``model`` (a MultibodyModel) with the driver held at
+    ``driver_angle`` and the load torque ``load`` on the driven sprocket (module docstring).
+    ``start``: a full state to start from (default: the straight-span layout,
+    ``model.initial_state``). Raises ValueError if Newton does not converge."""
+    t0 = time.perf_counter()
+    pr = _Problem(model, driver_angle, load)
+    x0 = model.initial_state(Inputs(float(driver_angle), 0.0, 0.0)) if start is None else start
+    u = np.concatenate([[x0[1]], x0[2:pr.n]]).astype(float)
+    g = abs(model.params["gravity"])
+    f = pr.forces(u)
+    if g > 0:
+        f_tol = tol * pr.m * g
+    else:   # no weight to compare with: a hundredth of tol of the largest link tension
+        f_tol = 1e-2 * tol * max(float(np.max(np.abs(pr.ws.tension))), 1e-3)
+    t_tol = f_tol * model.drive.driven.pitch_radius
+    f = pr.forces(u)
+    V = pr.potential(u)
+    # the driven sprocket's arc at its tooth tips counts like a roller's move: a free turn by
+    # a whole tooth would let the seats change rollers (and a loaded sprocket's V fall for ever)
+    r_turn = model.drive.driven.pitch_radius
+    it = 0
+    mu = 0.0
+    converged = False
+    for it in range(1, max_iter + 1):
+        if np.max(np.abs(f[1:])) <= f_tol and abs(f[0]) <= t_tol:
+            converged = True
+            it -= 1
+            break
+        H = -pr.jacobian(u, f)
+        d = np.maximum(np.abs(H.diagonal()), 1e-12 * np.max(np.abs(H.diagonal())))
+        D = csc_matrix((d, (np.arange(d.size), np.arange(d.size))), shape=H.shape)
+        norm = np.linalg.norm(f)
+        mu = 0.0 if mu < 1e-6 else 0.1 * mu
+        taken = False
+        for _ in range(40):
+            step = None
+            try:
+                du = splu((H + mu * D).tocsc()).solve(f)
+                if np.all(np.isfinite(du)) and f @ du > 0.0:
+                    step = du      # descends V (H + mu D positive definite along it)
+            except RuntimeError:   # singular: a roller with no stiffness at all
+                pass
+            if step is not None:
+                # backtracking, the step capped at a tenth of a pitch per roller: taken when
+                # it lowers V (Armijo) or the residual's norm - either merit alone stalls, V on
+                # a compressed straight span that must buckle into its sag, the residual
+                # across the kinks of the contacts and the links' play
+                alpha = min(1.0, 0.1 * model.drive.pitch / max(np.max(np.abs(step[1:])),
+                                                               abs(step[0]) * r_turn, 1e-300))
+                slope = -(f @ step)
+                for _ in range(30):
+                    un = u + alpha * step
+                    Vn = pr.potential(un)
+                    fn = pr.forces(un)
+                    if Vn <= V + 1e-4 * alpha * slope or (
+                            np.linalg.norm(fn) <= (1 - 1e-4 * alpha) * norm):
+                        taken = True
+                        break
+                    alpha *= 0.5
+            if taken:
+                break
+            mu = max(1e-6, 10.0 * mu)   # Levenberg: towards a scaled gradient step
+        if not taken:
+            break
+        u, V, f = un, Vn, fn
+        if DEBUG:
+            print(it, alpha, mu, np.max(np.abs(f[1:])), np.argmax(np.abs(f[1:]))//2, f[0], V)
+    x = np.zeros(2 * pr.n)
+    x[0] = driver_angle
+    x[1] = u[0]
+    x[2:pr.n] = u[1:]
+    tu, tl = _span_tensions(model, x)
+    res = float(np.max(np.abs(f[1:])))
+    sol = StaticSolution(x, float(driver_angle), float(load), tu, tl, res, float(f[0]), it,
+                         time.perf_counter() - t0, converged)
+    if not converged:
+        raise ValueError(
+            f"level 3 statics did not converge in {it} Newton steps (largest roller force "
+            f"{res:.3g} N, driven torque {f[0]:.3g} N m; tolerance {f_tol:.3g} N)")
+    return sol
+
+
+def _span_tensions(model, x) -> tuple[float, float]:
+    """(upper, lower) span tension at rest as level 3's outputs measure it (middle link)."""
+    n = 2 + 2 * model.M
+    model._accel(x, float(x[0]), 0.0, 0.0, 0.0)
+    spans = model._spans_out
+    _spans(model, x[:n], spans)
+    return float(model.ws.tension[spans[0][0]]), float(model.ws.tension[spans[1][0]])
+
+
+def _spans(model, q, spans):
+    span_ends(q, model.ws.dist, model.ws.side, model.ws.seat_angle, model._engaged_tol, model.P,
+       model._mids, spans)
+
+
+def sagged_layout(model, driver_angle: float = 0.0) -> np.ndarray:
+    """The straight-span layout (``model.initial_state``) with each span that is longer than
+    its chord (links at their free length l0) sagged into the parabola of that length along
+    gravity's component across the span: a chord l with n links of free length l0 > l / n
+    takes the midspan sag s = sqrt(3 l (n l0 - l) / 8) (arc length of a shallow parabola,
+    l + 8 s^2 / (3 l)). The start of a slack chain's Newton solve: from a straight, compressed
+    span Newton would first have to buckle it."""
+    x = model.initial_state(Inputs(float(driver_angle), 0.0, 0.0))
+    M = model.M
+    z = x[2:2 + 2 * M].reshape(M, 2)
+    model._accel(x, float(driver_angle), 0.0, 0.0, 0.0)   # the seat search _engaged reads
+    engaged = model._engaged(x)
+    free = ~engaged.any(axis=0)
+    if free.all() or not free.any():
+        return x
+    # the wrapped rollers at the bottom of their seats (towards the sprocket's centre by the
+    # clearance), where a chain's tension holds them: laid on the pitch circle they touch
+    # nothing, and a chain without pretension would float with no stiffness at all
+    clearance = model.P[K.I_DR]
+    for s in range(2):
+        centre = model._centres[s]
+        R = model.P[K.I_R1 + s]
+        for i in np.flatnonzero(engaged[s]):
+            th = model.ws.seat_angle[s, i]
+            seat = centre + R * np.array([math.cos(th), math.sin(th)])
+            z[i] = seat + (clearance + 1e-9) * (centre - seat) / R
+    g = np.array([model.P[K.I_GX], model.P[K.I_GY]])
+    l0 = model.P[K.I_L0]
+    start = int(np.flatnonzero(~free)[0])
+    i = 0
+    while i < M:
+        r = (start + i) % M
+        if not free[r]:
+            i += 1
+            continue
+        run = []
+        while i < M and free[(start + i) % M]:
+            run.append((start + i) % M)
+            i += 1
+        a, b = (run[0] - 1) % M, (run[-1] + 1) % M
+        chord = z[b] - z[a]
+        l = float(np.hypot(*chord))
+        n = len(run) + 1
+        if l <= 0 or n * l0 <= l:
+            continue
+        e = chord / l
+        across = g - (g @ e) * e
+        na = float(np.hypot(*across))
+        if na == 0.0:
+            across, na = np.array([-e[1], e[0]]), 1.0
+        # the parabola y = 4 s xi (1 - xi) of arc length n l0 (Newton on s, from the shallow
+        # approximation), the rollers at equal arc lengths along it (links at l0)
+        xi = np.linspace(0.0, 1.0, 2001)
+        sag = math.sqrt(3.0 * l * (n * l0 - l) / 8.0)
+        for _ in range(20):
+            slope = 4.0 * sag * (1.0 - 2.0 * xi) / l
+            ds = np.sqrt(1.0 + slope * slope)
+            arc = l * float(np.trapezoid(ds, xi))
+            darc = l * float(np.trapezoid(slope * 4.0 * (1.0 - 2.0 * xi) / l / ds, xi))
+            sag -= (arc - n * l0) / darc
+        slope = 4.0 * sag * (1.0 - 2.0 * xi) / l
+        ds = np.sqrt(1.0 + slope * slope)
+        s_xi = np.concatenate([[0.0], np.cumsum(0.5 * (ds[1:] + ds[:-1]) * np.diff(xi))])
+        for k, rr in enumerate(run, start=1):
+            t = float(np.interp(k / n * s_xi[-1], s_xi, xi))
+            z[rr] = z[a] + t * chord + 4.0 * sag * t * (1.0 - t) * across / na
+    x[2:2 + 2 * M] = z.ravel()
+    return x
+
+
+def static_state(model, driver_angle: float = 0.0, load: float = 0.0) -> StaticSolution:
+    """:func:`solve_statics` from :func:`sagged_layout` (the straight-span layout where the
+    spans are not longer than their chords), or, if that fails, from the straight-span
+    layout."""
+    try:
+        return solve_statics(model, driver_angle, load, start=sagged_layout(model, driver_angle))
+    except ValueError:
+        return solve_statics(model, driver_angle, load)

@@ -1,0 +1,254 @@
+"""Levels 0-2's span ends from level 3's statics (issue 21 items 3-4; docs/reduced_models.md,
+"One wrap and one static tension from level 3's statics").
+
+Levels 1-2 hold each span between its sprockets with the law T_raw = (l - n p_free - f) /
+(n / k + c) (spans.py ``_tension``): n links of stiffness k in series with an end compliance c,
+and a free length f the ends give away. With ``torsional.wrap_statics`` the span tension is
+T = (T_raw + sqrt(T_raw^2 + 4 a^2)) / 2: the raw law well above a floor a, a where the raw law
+reaches zero, a^2 / |T_raw| below it. All three are fitted to the static equilibrium of level
+3's own chain (:mod:`chainmodel.models.multibody_statics`: the same rollers, links, seats with
+their clearance and flanks, gravity), condensed onto the driven sprocket's rotation (driver held
+at angle 0):
+
+* the driven sprocket's torsional stiffness K_3 = 2 dM / |phi2(+dM) - phi2(-dM)|, the secant
+  over a load step dM = ``LOAD_STEP`` T_0 R_o either way, and level 1's
+  R_o^2 sum_spans s_s / (n_s / k + c) = K_3 gives c (n_s the tooth-period-mean link counts
+  level 1 uses, s_s the floor's slope dT / dT_raw at rest);
+* the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
+  at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
+  driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
+  3's span tensions' sum rises under load; docs/reduced_models.md); a = 0 where the floor cannot
+  match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
+  found;
+* the static span tension T_0 (mean of the two spans' middle links at rest, no load) and
+  levels 0-2's static law T_0 = floor((X - 2 f) / (D + 2 c)) (static_tension._static_numerator's
+  X, D without seats) give f.
+
+So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
+tension decay around the wrap included, level 1's driven-sprocket stiffness is level 3's
+condensed one and its loaded split at rest follows level 3's. Computed once per (drive,
+parameters): 3 + 4 x 5 static solves.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from ..geometry import Drive
+from .multibody_statics import solve_statics, static_state
+from . import static_tension as ST
+
+__all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
+           "SLACK_SHARE"]
+
+#: the secant's load step dM / (T_0 R_o)
+LOAD_STEP = 0.2
+#: the loaded split is fitted where a linear law's slack span would carry this share of T_0
+SLACK_SHARE = 0.25
+#: driver positions over a tooth period at which the loaded split is solved (their mean)
+ANGLES = 4
+
+_CACHE: dict = {}
+
+
+@dataclass(frozen=True)
+class WrapFit:
+    """Level 3's statics condensed for levels 0-2 (module docstring).
+
+    compliance, free_length: per span end pair (c [m/N], f [m]) for spans.py's law;
+    static_tension: T_0 [N]; stiffness: K_3 [N m/rad] (driven sprocket, driver held);
+    upper, lower: the two span tensions at rest [N]; solves_wall: seconds spent."""
+    compliance: float
+    free_length: float
+    static_tension: float
+    stiffness: float
+    upper: float
+    lower: float
+    solves_wall: float
+    softness: float = 0.0
+    loaded_slack: float = float("nan")
+
+
+def _key(drive: Drive, params: Mapping[str, Any]):
+    return (drive, tuple(sorted((k, v) for k, v in params.items()
+                                if not k.startswith(("solver.", "output", "torsional.",
+                                                     "modal.")))))
+
+
+def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
+    """(c, f, T_0, K_3, ...) of this drive and parameters (module docstring); cached."""
+    key = _key(drive, params)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit
+    from .multibody import MultibodyModel
+    _rest_geometry = ST._rest_geometry
+    from ..kinematics.wrapping import tooth_period_geometry
+    import numpy as np
+    from .. import parameters as PRM
+    p3 = {k: v for k, v in params.items() if k in PRM.BY_NAME}
+    model = MultibodyModel(drive, p3)
+    rest = static_state(model)
+    t0 = rest.mean_tension
+    ro = drive.driven.pitch_radius
+    w = abs(p3["gravity"]) * p3["chain.link_mass"]
+    for share in (LOAD_STEP, 0.25 * LOAD_STEP, 0.05 * LOAD_STEP):
+        # a smaller step where a roller at a tooth tip (where its contact ends) stalls Newton
+        dm = share * max(t0, w) * ro
+        try:
+            plus = _loaded(model, rest, dm)
+            minus = _loaded(model, rest, -dm)
+            break
+        except ValueError:
+            if share == 0.05 * LOAD_STEP:
+                raise
+    k3 = 2.0 * dm / abs(minus.driven_angle - plus.driven_angle)
+    k = p3["chain.link_stiffness"]
+    g = tooth_period_geometry(drive, 100)
+    n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
+    excess, links = _rest_geometry(drive)
+    x = excess + links * p3["chain.pretension"] / k
+    wall = rest.wall + plus.wall + minus.wall
+    # the loaded split: level 3's slack span at a load that would take a linear law's slack
+    # span to SLACK_SHARE of T_0
+    m_b = (1.0 - SLACK_SHARE) * 2.0 * t0 * ro
+    slack3 = None
+    try:
+        # the mean over a tooth period of the driver (ANGLES positions), as level 1's
+        # tooth-period-mean link counts see it
+        slacks = []
+        for j in range(ANGLES):
+            angle = 2.0 * math.pi / drive.n_driver * j / ANGLES
+            start = rest if j == 0 else static_state(model, angle)
+            state = start.state
+            wall += start.wall if j else 0.0
+            for share in (0.25, 0.5, 0.75, 1.0):
+                sol = solve_statics(model, angle, share * m_b, start=state)
+                state = sol.state
+                wall += sol.wall
+            slacks.append(min(sol.tension_upper, sol.tension_lower))
+        slack3 = float(np.mean(slacks))
+    except ValueError:   # no loaded equilibrium found: no floor
+        slack3 = None
+    b = 0.0
+    c = _compliance(k3 / (ro * ro), n_up, n_low, k, 1.0, 1.0)
+    for _ in range(4):
+        t0_lin = _linear(t0, b)
+        su, sl = _slope(t0_lin, b), _slope(t0_lin, b)
+        c = _compliance(k3 / (ro * ro), n_up, n_low, k, su, sl)
+        if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, m_b / ro):
+            break
+        b = _softness(t0, slack3, c, n_up, n_low, k, m_b / ro)
+    t0_lin = _linear(t0, b)
+    f = 0.5 * (x - t0_lin * (links / k + 2.0 * c))
+    fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
+                  float("nan") if slack3 is None else slack3)
+    if len(_CACHE) > 256:
+        _CACHE.clear()
+    _CACHE[key] = fit
+    return fit
+
+
+def span_ends(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float, float]:
+    """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
+    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count), else - or
+    where level 3 has no static equilibrium - the seat ladder
+    (:func:`~chainmodel.models.static_tension.seat_series_compliance`) and no floor."""
+    if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
+        try:
+            fit = wrap_fit(drive, params)
+            return fit.compliance, fit.free_length, fit.softness
+        except ValueError:
+            pass
+    c, f = ST.seat_series_compliance(params, drive)
+    return c, f, 0.0
+
+
+def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
+    """Levels 0-2's static span tension [N]: :func:`~chainmodel.models.static_tension.
+    static_span_tension` (the seat ladder), or with ``torsional.wrap_statics`` the same law on
+    :func:`span_ends`' (c, f), floored: level 3's static tension."""
+    if drive.links is None or not params.get("torsional.wrap_statics"):
+        return ST.static_span_tension(drive, params)
+    c, f, a = span_ends(drive, params)
+    k = params["chain.link_stiffness"]
+    excess, links = ST._rest_geometry(drive)
+    raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
+    return softplus(raw, a)
+
+
+def softplus(raw: float, b: float) -> float:
+    """The span law's floor under the slack span, (raw + sqrt(raw^2 + 4 b^2)) / 2 (raw itself
+    for b = 0, clamped at 0; spans.py ``_tension``)."""
+    if b <= 0.0:
+        return max(raw, 0.0)
+    r = math.sqrt(raw * raw + 4.0 * b * b)
+    return 0.5 * (raw + r) if raw > 0 else 2.0 * b * b / (r - raw)
+
+
+def _linear(t0, b):
+    """The raw (linear) tension whose floored value is t0: t0 - b^2 / t0."""
+    if b <= 0.0:
+        return t0
+    return t0 - b * b / t0
+
+
+def _slope(raw, b):
+    return 1.0 if b <= 0.0 else 0.5 * (1.0 + raw / math.sqrt(raw * raw + 4.0 * b * b))
+
+
+def _compliance(target, n_up, n_low, k, su, sl):
+    """c with su / (n_up / k + c) + sl / (n_low / k + c) = target (span stiffness per R_o^2)."""
+    from scipy.optimize import brentq
+
+    def stiff(c):
+        return su / (n_up / k + c) + sl / (n_low / k + c)
+
+    lo = -0.999 * min(n_up, n_low) / k
+    hi = max(n_up, n_low) / k
+    while stiff(hi) > target:
+        hi *= 4.0
+    return float(brentq(lambda cc: stiff(cc) - target, lo, hi, xtol=1e-18, rtol=1e-13))
+
+
+def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
+    """The slack span's tension of the level-1 law at rest under a load whose tension
+    difference is dt: both spans' raw tensions move by their stiffness times one rotation,
+    softplus(t0 + k_u u) - softplus(t0 - k_l u) = dt."""
+    from scipy.optimize import brentq
+    ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
+
+    def diff(u):
+        return softplus(t0_lin + ku * u, b) - softplus(t0_lin - kl * u, b) - dt
+
+    hi = dt / min(ku, kl)
+    while diff(hi) < 0:
+        hi *= 2.0
+    u = brentq(diff, 0.0, hi, xtol=1e-15)
+    return softplus(t0_lin - kl * u, b)
+
+
+def _softness(t0, slack3, c, n_up, n_low, k, dt):
+    """b with which the level-1 law's slack span under dt is level 3's slack3 (T_0 kept)."""
+    from scipy.optimize import brentq
+
+    def err(b):
+        return _split_slack(_linear(t0, b), b, c, n_up, n_low, k, dt) - slack3
+
+    hi = max(slack3, 1e-3)
+    while err(hi) < 0 and hi < 1e3 * t0:
+        hi *= 2.0
+    if err(hi) < 0:
+        return 0.0
+    return float(brentq(err, 1e-9 * t0, hi, xtol=1e-9 * t0))
+
+
+def _loaded(model, rest, load):
+    """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
+    span's load step is small next to its distance from the straight layout)."""
+    try:
+        return solve_statics(model, 0.0, load, start=rest.state)
+    except ValueError:
+        return static_state(model, 0.0, load)
