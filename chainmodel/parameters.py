@@ -230,7 +230,8 @@ PARAMETERS: tuple[Parameter, ...] = (
        "clearance and flanks, gravity), condensed onto the driven sprocket: the static tension "
        "is level 3's, the driven sprocket's stiffness its condensed one and the loaded split at "
        "rest follows level 3's (docs/reduced_models.md, \"One wrap\"); off, "
-       "torsional.seat_compliance decides", kind=bool, levels=(0, 1, 2)),
+       "torsional.seat_compliance decides, except that levels 0-1 give a chain with no "
+       "pretension that hangs on its sag level 3's static tension", kind=bool, levels=(0, 1, 2)),
     _p("torsional.mean_link_compliance", True, "",
        "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
        "tooth-period-mean link count n, while its stretch follows the current count: the tension "

@@ -195,7 +195,7 @@ def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float
     if pretension > 0 and pretension_error(drive, trial) is not None:
         return 0.0
     if level <= 2:   # the levels 0-2 share it (level 2 refuses to build at zero tension)
-        return static_span_tension(drive, trial)
+        return static_span_tension(drive, trial, sag=False)
     return float(model_class(level)(drive, trial).static_tension())
 
 

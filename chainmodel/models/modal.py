@@ -63,6 +63,9 @@ class ModalModel(TorsionalModel):
     name: ClassVar[str] = "modal"
     preferred_method: ClassVar[str] = "rk4"
     second_order: ClassVar[bool] = False
+    #: the string modes need a taut span: a chain that hangs on its sag is refused here, not
+    #: given level 3's sag tension (its spans are not strings; docs/reduced_models.md)
+    carries_sag: ClassVar[bool] = False
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
         from ..parameters import BY_NAME

@@ -67,6 +67,9 @@ class TorsionalModel(Model):
     name: ClassVar[str] = "torsional"
     preferred_method: ClassVar[str] = "rk4"
     second_order: ClassVar[bool] = True
+    #: a chain with no pretension that hangs on its sag carries level 3's static tension here
+    #: (chainmodel.models.wrap_statics.hangs_on_its_sag; issue 21 item 4)
+    carries_sag: ClassVar[bool] = True
     n_modes: int = 0
     #: names of switching_functions' entries (for messages)
     switching_names: ClassVar[tuple[str, ...]] = SWITCH_NAMES
@@ -136,7 +139,7 @@ class TorsionalModel(Model):
         (option ``torsional.seat_compliance``; :func:`~chainmodel.models.kinematic.
         seat_series_compliance`), or with ``torsional.wrap_statics`` from level 3's statics
         (:func:`~chainmodel.models.wrap_statics.span_ends`)."""
-        return span_ends(self.drive, self.params)[:2]
+        return span_ends(self.drive, self.params, sag=self.carries_sag)[:2]
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -145,7 +148,7 @@ class TorsionalModel(Model):
         P[S.P_C_LINK] = p["chain.link_damping"]
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
-        P[S.P_SOFT] = span_ends(self.drive, self.params)[2]
+        P[S.P_SOFT] = span_ends(self.drive, self.params, sag=self.carries_sag)[2]
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]
@@ -301,8 +304,8 @@ class TorsionalModel(Model):
         Computed once per model (its parameters are fixed): level 2 asks for it five times."""
         cached = self.__dict__.get("_static_tension_value")
         if cached is None:
-            cached = self.__dict__["_static_tension_value"] = static_span_tension(self.drive,
-                                                                                  self.params)
+            cached = self.__dict__["_static_tension_value"] = static_span_tension(
+                self.drive, self.params, sag=self.carries_sag)
         return cached
 
     def axial_frequency(self) -> float:

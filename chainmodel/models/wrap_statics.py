@@ -41,7 +41,7 @@ from .multibody_statics import solve_statics, static_state
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
-           "SLACK_SHARE"]
+           "SLACK_SHARE", "hangs_on_its_sag", "sag_tension"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -151,10 +151,13 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     return fit
 
 
-def span_ends(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float, float]:
+def span_ends(drive: Drive, params: Mapping[str, Any], *, sag: bool = True
+              ) -> tuple[float, float, float]:
     """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
-    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count), else - or
-    where level 3 has no static equilibrium - the seat ladder
+    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count); for a
+    chain that hangs on its sag (:func:`hangs_on_its_sag`, unless ``sag=False``) the seat
+    ladder's compliance with the free length that gives level 3's static tension
+    (:func:`sag_tension`); else - or where level 3 has no static equilibrium - the seat ladder
     (:func:`~chainmodel.models.static_tension.seat_series_compliance`) and no floor."""
     if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
         try:
@@ -163,16 +166,52 @@ def span_ends(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float, fl
         except ValueError:
             pass
     c, f = ST.seat_series_compliance(params, drive)
+    if sag and hangs_on_its_sag(drive, params):
+        t0 = sag_tension(drive, params)
+        if t0 is not None:
+            k = params["chain.link_stiffness"]
+            excess, links = ST._rest_geometry(drive)
+            return c, 0.5 * (excess - t0 * (links / k + 2.0 * c)), 0.0
     return c, f, 0.0
 
 
-def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
-    """Levels 0-2's static span tension [N]: :func:`~chainmodel.models.static_tension.
-    static_span_tension` (the seat ladder), or with ``torsional.wrap_statics`` the same law on
-    :func:`span_ends`' (c, f), floored: level 3's static tension."""
-    if drive.links is None or not params.get("torsional.wrap_statics"):
+def hangs_on_its_sag(drive: Drive, params: Mapping[str, Any]) -> bool:
+    """True for a chain with no pretension that the seat ladder leaves without tension at rest
+    under gravity: its spans hang on their sag, a tension only level 3's statics carry (issue 21
+    item 4; docs/reduced_models.md, "One wrap and one static tension")."""
+    return (drive is not None and drive.links is not None and params["chain.pretension"] == 0.0
+            and params["gravity"] != 0.0 and ST.static_span_tension(drive, params) == 0.0)
+
+
+def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
+    """Level 3's static span tension [N] of this drive at rest, no load (its static
+    equilibrium, gravity included: :func:`~chainmodel.models.multibody_statics.static_state`),
+    or None where the statics find no equilibrium; cached per drive and parameters."""
+    key = ("sag",) + _key(drive, params)
+    if key not in _CACHE:
+        from .multibody import MultibodyModel
+        from .. import parameters as PRM
+        try:
+            t0 = static_state(MultibodyModel(drive, {k: v for k, v in params.items()
+                                                      if k in PRM.BY_NAME})).mean_tension
+        except ValueError:
+            t0 = None
+        if len(_CACHE) > 256:
+            _CACHE.clear()
+        _CACHE[key] = t0
+    return _CACHE[key]
+
+
+def static_span_tension(drive: Drive, params: Mapping[str, Any], *, sag: bool = True) -> float:
+    """Levels 0-2's static span tension [N]: the span law at rest on :func:`span_ends`' (c, f),
+    floored - the seat ladder's (:func:`~chainmodel.models.static_tension.static_span_tension`),
+    or level 3's static tension with ``torsional.wrap_statics`` and, unless ``sag=False``, for a
+    chain that hangs on its sag. The scene's pretension search probes pretension 0 with
+    ``sag=False`` (without the statics' cost); level 2 passes it too (its string modes need a
+    taut span, so it refuses a chain that hangs on its sag)."""
+    if drive.links is None:
         return ST.static_span_tension(drive, params)
-    c, f, a = span_ends(drive, params)
+    c, f, a = span_ends(drive, params, sag=sag)
     k = params["chain.link_stiffness"]
     excess, links = ST._rest_geometry(drive)
     raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)

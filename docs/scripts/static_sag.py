@@ -5,7 +5,9 @@ statics").
 The 08B fan drive of examples/scenes/08b_fan_1500rpm.toml without its static tension, the
 centre distance moved from the tight-wrap one. Columns: the elastic catenary (parabolic sag,
 Irvine's cable, on levels 0-2's seat ladder: X + sum_spans (w cos psi)^2 l^3 / (24 T^2) = T D);
-levels 0-2 with the seat ladder (the default); levels 0, 1, 2 with torsional.wrap_statics (span
+the seat ladder alone (levels 0-2 before issue 21: 0 N on a slack chain); level 1 by default
+(a chain that hangs on its sag takes level 3's statics without being asked,
+wrap_statics.hangs_on_its_sag); levels 0, 1, 2 with torsional.wrap_statics (span
 ends condensed from level 3's statics); level 3's static equilibrium (multibody_statics: Newton
 steps, wall time of the solve); level 3's dynamic model over 0.1 s at rest started from that
 equilibrium (the mean of its two span outputs).
@@ -24,6 +26,7 @@ from chainmodel.integrate import Verlet
 from chainmodel.models import Inputs
 from chainmodel.models.multibody_statics import static_state
 from chainmodel.models.static_tension import _static_numerator
+from chainmodel.models.static_tension import static_span_tension as ladder
 from chainmodel.scene import load_scene
 
 PATH = "examples/scenes/08b_fan_1500rpm.toml"
@@ -39,7 +42,7 @@ def at_rest(model, x):
 
 def main():
     d0 = load_scene(PATH, fidelity=1, static_tension=None).drive
-    print(f"{'dc [mm]':>8s} {'catenary':>9s} {'L0-2 ladder':>11s} {'L0 wrap':>8s} {'L1 wrap':>8s} "
+    print(f"{'dc [mm]':>8s} {'catenary':>9s} {'ladder':>7s} {'L1 default':>10s} {'L0 wrap':>8s} {'L1 wrap':>8s} "
           f"{'L2 wrap':>8s} {'L3 statics':>10s} {'steps':>5s} {'solve':>7s} {'L3 at rest':>10s}")
     for dc in (0.0, -0.5e-3, -2e-3, -5e-3, -10e-3, -20e-3):
         a = d0.centre_distance + dc
@@ -59,7 +62,7 @@ def main():
                 wrap.append(math.nan)
         m3 = load_scene(PATH, fidelity=3, static_tension=None, drive_centre_distance=a).model()
         sol = static_state(m3)
-        print(f"{1e3 * dc:8.1f} {t:9.1f} {m.static_tension():11.1f} {wrap[0]:8.2f} {wrap[1]:8.2f} "
+        print(f"{1e3 * dc:8.1f} {t:9.1f} {ladder(d, p):7.1f} {m.static_tension():10.2f} {wrap[0]:8.2f} {wrap[1]:8.2f} "
               f"{wrap[2]:8.2f} {sol.mean_tension:10.2f} {sol.iterations:5d} "
               f"{1e3 * sol.wall:5.0f}ms {at_rest(m3, sol.state):10.2f}", flush=True)
 
