@@ -16,7 +16,7 @@ from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
 __all__ = ["static_span_tension", "seat_stiffness", "seat_series_compliance", "seated_tension",
-           "pretension_error", "loose_chain_error"]
+           "pretension_error", "loose_chain_error", "rest_geometry", "static_numerator"]
 
 
 def seat_stiffness(contact_stiffness: float, link_stiffness: float) -> float:
@@ -74,7 +74,7 @@ def seat_series_compliance(params: Mapping[str, Any], drive: Drive | None = None
     return 2.0 / k_seat, 2.0 * clearance - wrapped / k_seat
 
 
-def _rest_geometry(drive: Drive) -> tuple[float, float]:
+def rest_geometry(drive: Drive) -> tuple[float, float]:
     """(excess L - M p, span link count n_u + n_l) at rest (four-bar), as tooth-period means:
     the excess as <(L - M p) / (n_u + n_l)> <n_u + n_l>, the mean stretch of a span link."""
     g = tooth_period_geometry(drive, 100)
@@ -83,10 +83,10 @@ def _rest_geometry(drive: Drive) -> tuple[float, float]:
     return float(np.mean((g.wrap_length - drive.links * drive.pitch) / links)) * n, n
 
 
-def _static_numerator(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
+def static_numerator(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
     """(X, D) with the static span tension T = max(0, X / D) (:func:`static_span_tension`)."""
     k = params["chain.link_stiffness"]
-    excess, links = _rest_geometry(drive)
+    excess, links = rest_geometry(drive)
     c, free = seat_series_compliance(params, drive)
     x = excess + links * params["chain.pretension"] / k - 2.0 * free
     return x, links / k + 2.0 * c
@@ -111,7 +111,7 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     """
     if drive.links is None:
         return params["chain.pretension"]
-    x, d = _static_numerator(drive, params)
+    x, d = static_numerator(drive, params)
     return max(0.0, x / d)
 
 
@@ -121,7 +121,7 @@ def loose_chain_error(drive: Drive, params: Mapping[str, Any]) -> str | None:
     slack at rest, and no pre-strain is a model of its tension (docs/stability.md)."""
     if drive.links is None:
         return None
-    excess, _ = _rest_geometry(drive)
+    excess, _ = rest_geometry(drive)
     clearance = max(0.0, params["contact.seat_radius"] - params["chain.roller_radius"])
     if excess + 4.0 * clearance > 0.0:
         return None

@@ -21,7 +21,7 @@ at angle 0):
   match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
   found;
 * the static span tension T_0 (mean of the two spans' middle links at rest, no load) and
-  levels 0-2's static law T_0 = floor((X - 2 f) / (D + 2 c)) (static_tension._static_numerator's
+  levels 0-2's static law T_0 = floor((X - 2 f) / (D + 2 c)) (static_tension.static_numerator's
   X, D without seats) give f.
 
 So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
@@ -36,9 +36,15 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+import numpy as np
+from scipy.optimize import brentq
+
+from .. import parameters as PRM
 from ..geometry import Drive
-from .multibody_statics import solve_statics, static_state
+from ..kinematics.wrapping import tooth_period_geometry
 from . import static_tension as ST
+from .multibody import MultibodyModel
+from .multibody_statics import solve_statics, static_state
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
            "SLACK_SHARE", "hangs_on_its_sag", "sag_tension"]
@@ -83,11 +89,6 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
-    from .multibody import MultibodyModel
-    _rest_geometry = ST._rest_geometry
-    from ..kinematics.wrapping import tooth_period_geometry
-    import numpy as np
-    from .. import parameters as PRM
     p3 = {k: v for k, v in params.items() if k in PRM.BY_NAME}
     model = MultibodyModel(drive, p3)
     rest = static_state(model)
@@ -108,7 +109,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     k = p3["chain.link_stiffness"]
     g = tooth_period_geometry(drive, 100)
     n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
-    excess, links = _rest_geometry(drive)
+    excess, links = ST.rest_geometry(drive)
     x = excess + links * p3["chain.pretension"] / k
     wall = rest.wall + plus.wall + minus.wall
     # the loaded split: level 3's slack span at a load that would take a linear law's slack
@@ -170,7 +171,7 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, sag: bool = True
         t0 = sag_tension(drive, params)
         if t0 is not None:
             k = params["chain.link_stiffness"]
-            excess, links = ST._rest_geometry(drive)
+            excess, links = ST.rest_geometry(drive)
             return c, 0.5 * (excess - t0 * (links / k + 2.0 * c)), 0.0
     return c, f, 0.0
 
@@ -189,8 +190,6 @@ def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     or None where the statics find no equilibrium; cached per drive and parameters."""
     key = ("sag",) + _key(drive, params)
     if key not in _CACHE:
-        from .multibody import MultibodyModel
-        from .. import parameters as PRM
         try:
             t0 = static_state(MultibodyModel(drive, {k: v for k, v in params.items()
                                                       if k in PRM.BY_NAME})).mean_tension
@@ -213,7 +212,7 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any], *, sag: bool = 
         return ST.static_span_tension(drive, params)
     c, f, a = span_ends(drive, params, sag=sag)
     k = params["chain.link_stiffness"]
-    excess, links = ST._rest_geometry(drive)
+    excess, links = ST.rest_geometry(drive)
     raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
     return softplus(raw, a)
 
@@ -240,7 +239,6 @@ def _slope(raw, b):
 
 def _compliance(target, n_up, n_low, k, su, sl):
     """c with su / (n_up / k + c) + sl / (n_low / k + c) = target (span stiffness per R_o^2)."""
-    from scipy.optimize import brentq
 
     def stiff(c):
         return su / (n_up / k + c) + sl / (n_low / k + c)
@@ -256,7 +254,6 @@ def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
     """The slack span's tension of the level-1 law at rest under a load whose tension
     difference is dt: both spans' raw tensions move by their stiffness times one rotation,
     softplus(t0 + k_u u) - softplus(t0 - k_l u) = dt."""
-    from scipy.optimize import brentq
     ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
 
     def diff(u):
@@ -271,7 +268,6 @@ def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
 
 def _softness(t0, slack3, c, n_up, n_low, k, dt):
     """b with which the level-1 law's slack span under dt is level 3's slack3 (T_0 kept)."""
-    from scipy.optimize import brentq
 
     def err(b):
         return _split_slack(_linear(t0, b), b, c, n_up, n_low, k, dt) - slack3

@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 from chainmodel.integrate import Verlet
 from chainmodel.models import Inputs
 from chainmodel.models.multibody_statics import static_state
-from chainmodel.models.static_tension import _static_numerator
+from chainmodel.models.static_tension import static_numerator
 from chainmodel.models.static_tension import static_span_tension as ladder
 from chainmodel.scene import load_scene
 
@@ -48,7 +48,7 @@ def main():
         a = d0.centre_distance + dc
         m = load_scene(PATH, fidelity=1, static_tension=None, drive_centre_distance=a).model()
         p, d, r = m.params, m.drive, m.reference
-        x, dd = _static_numerator(d, p)
+        x, dd = static_numerator(d, p)
         w = p["chain.link_mass"] / d.pitch * p["gravity"]
         sag = sum((w * math.cos(r["dir_" + s])) ** 2 * r["l_" + s] ** 3 / 24 for s in ("up", "low"))
         t = brentq(lambda tt: tt * dd - x - sag / tt ** 2, 1e-6, 1e7)
