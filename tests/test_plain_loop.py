@@ -45,8 +45,8 @@ def test_integrate_keeps_no_copy_of_the_step_rule_or_the_crossing():
 
 from chainmodel.kernels import multibody_loops, stepping  # noqa: E402
 
-INSTANCES = [("_points", stepping.points, ("_begin", "_advance", "_outputs")),
-             ("_held", stepping.held, ("_points",)),
+INSTANCES = [("_points", stepping.points, ("_advance", "_outputs")),
+             ("_held", stepping.held, ("_points", "_begin")),
              ("_rk4_from", stepping.rk4, ("_rhs_at",)),
              ("_verlet_from", stepping.verlet, ("_rhs_at",))]
 

@@ -143,11 +143,13 @@ def fixed_steps(method, x, t0, h, nsteps, c, P, W3, k1, k2, k3, k4, xt, st, star
 def _begin(K, n):
     """The work arrays of :func:`_advance`: flags (the geometry of the current state is in
     scr; the acceleration half of k1 holds the outputs' forces at the current point), the
-    communication step's inputs ``c``, the force law's status."""
-    return np.zeros(2), np.empty(C_SIZE), np.zeros(1)
+    communication step's inputs ``c``, the force law's status (one allocation: the FMU's held
+    step makes them at every communication step)."""
+    buf = np.zeros(C_SIZE + 3)
+    return buf[C_SIZE:C_SIZE + 2], buf[:C_SIZE], buf[C_SIZE + 2:]
 
 
-@jit_noalloc
+@jit_inline
 def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_cap):
     """Communication step i of :func:`stepping.points` (no switching functions at this level):
     split into ceil(H / h_max) equal steps, h_max from the state at its start (the stable-step
@@ -199,7 +201,7 @@ def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_c
     return STATUS_OK, m, 0, m * per_step, times[i], 0.0
 
 
-@jit_noalloc
+@jit_inline
 def _outputs(i, x, angle, speed, acc, load, K, S, out):
     """The outputs at point i into ``out`` (:func:`outputs_row`, its forces into k1's
     acceleration half: with Verlet on a flexible input shaft they start the next step)."""
@@ -215,9 +217,9 @@ def _outputs(i, x, angle, speed, acc, load, K, S, out):
 
 
 #: the sampling loop and the held step, written once in chainmodel.kernels.stepping
-_points = instance(stepping.points, "_points", __name__, noalloc=False, _begin=_begin,
-                   _advance=_advance, _outputs=_outputs)
-_held = instance(stepping.held, "_held", __name__, noalloc=False, _points=_points)
+_points = instance(stepping.points, "_points", __name__, _advance=_advance, _outputs=_outputs)
+_held = instance(stepping.held, "_held", __name__, noalloc=False, _points=_points,
+                 _begin=_begin)
 
 
 @jit
@@ -238,8 +240,8 @@ def points_loop(method, x_in, x_out, times, angle, speed, acc, load, P, OM, cfg,
     its frequency bound), STATUS_OUTPUTS (a non-finite output at t_status, its row filled)."""
     K = (method, P, OM, (tension, fcon, side, dist, seat_angle, scr), k1, k2, k3, k4, xt, mids,
          tol, tooth_ratio, spans)
-    return _points(x_in, x_out, times, angle, speed, acc, load, K, cfg, OUT, states,
-                   np.empty(0), 0)
+    return _points(x_in, x_out, times, angle, speed, acc, load, K, _begin(K, x_in.shape[0]), cfg,
+                   OUT, states, np.empty(0), 0)
 
 
 @jit

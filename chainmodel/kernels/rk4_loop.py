@@ -4,10 +4,11 @@ location and crossing, and the outputs, over one or many communication steps in 
 status loop, the held step and the RK4 and Verlet steps are this level's instances of the
 sources in :mod:`chainmodel.kernels.stepping` (written once for every level: ``_points``,
 ``_held``, ``_rk4_from``, ``_verlet_from``); :func:`_advance` (one communication step:
-:func:`_interval`) and :func:`_outputs` are what this level plugs into them. Every other fixed-step run (a model without kernels, the
-``integrate.python_loop_model`` twin) runs these functions' own source on the model interface
-(:mod:`chainmodel.kernels.plain_loop` rebinds the six names that touch the model:
-``_rhs_at``, ``_switch``, ``_omega_at``, ``_event_step``, ``_after_step``, ``_step_from``).
+:func:`_interval`) and :func:`_outputs` are what this level plugs into them. Every other
+fixed-step run (a model without kernels, the ``integrate.python_loop_model`` twin) runs
+these functions' own source on the model interface (:mod:`chainmodel.kernels.plain_loop`
+rebinds the six names that touch the model: ``_rhs_at``, ``_switch``, ``_omega_at``,
+``_event_step``, ``_after_step``, ``_step_from``).
 
 **Inputs inside a communication step** [t0, t1]: the input-shaft angle is the cubic Hermite
 interpolant of the (angle, speed) given at both ends, its acceleration the interpolant's second
@@ -46,7 +47,7 @@ import math
 
 import numpy as np
 
-from .._numba import jit, jit_noalloc
+from .._numba import jit, jit_inline, jit_noalloc
 from . import stepping
 from .stepping import (STATUS_AMPLITUDE, STATUS_NONFINITE, STATUS_OK, STATUS_OUTPUTS,
                        STATUS_UNSTABLE, finite, instance)
@@ -596,12 +597,17 @@ def _check(x, P, Q):
 def _begin(K, n):
     """The work arrays of :func:`_advance`: the inputs c, the state-sized rows W, the switching
     functions' rows V, the kernel's auxiliary values and a flag ``started`` (W[3], V[0] and
-    aux hold the evaluation at the current point with its own inputs)."""
-    return (np.empty(C_SIZE), np.empty((W_ROWS, n)), np.empty((V_ROWS, 6)), np.empty(A_SIZE),
-            np.zeros(1))
+    aux hold the evaluation at the current point with its own inputs), all in one allocation
+    (the FMU's held step makes them at every communication step)."""
+    w_end = C_SIZE + 1 + W_ROWS * n
+    v_end = w_end + V_ROWS * 6
+    buf = np.empty(v_end + A_SIZE)
+    buf[C_SIZE] = 0.0
+    return (buf[:C_SIZE], buf[C_SIZE + 1:w_end].reshape((W_ROWS, n)),
+            buf[w_end:v_end].reshape((V_ROWS, 6)), buf[v_end:], buf[C_SIZE:C_SIZE + 1])
 
 
-@jit_noalloc
+@jit_inline
 def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_cap):
     """Communication step i of :func:`stepping.points`: :func:`_interval` on the cubic Hermite
     of the inputs at both ends, then the span modes' amplitude check."""
@@ -640,7 +646,7 @@ def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_c
     return status, m, e, v, t_st, w
 
 
-@jit_noalloc
+@jit_inline
 def _outputs(i, x, angle, speed, acc, load, K, S, out):
     """The outputs at point i into ``out``; returns the evaluations made (0 when the one that
     ended the last step was at the point's own inputs)."""
@@ -667,9 +673,9 @@ def _switch_at(x, th, w, acc, load, G, P, dx, aux, g):
 
 
 #: the sampling loop and the held step, written once in chainmodel.kernels.stepping
-_points = instance(stepping.points, "_points", __name__, noalloc=False, _begin=_begin,
-                   _advance=_advance, _outputs=_outputs)
-_held = instance(stepping.held, "_held", __name__, noalloc=False, _points=_points)
+_points = instance(stepping.points, "_points", __name__, _advance=_advance, _outputs=_outputs)
+_held = instance(stepping.held, "_held", __name__, noalloc=False, _points=_points,
+                 _begin=_begin)
 
 
 @jit
@@ -681,8 +687,9 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
     instance of :func:`chainmodel.kernels.stepping.points` (its docstring: OUT, states, log,
     the result). Status as :func:`_interval`, or STATUS_AMPLITUDE (checked at each point) or
     STATUS_OUTPUTS."""
-    return _points(x_in, x_out, times, angle, speed, acc, load, (G, P, Q), cfg, OUT, states,
-                   log, log_cap)
+    K = (G, P, Q)
+    return _points(x_in, x_out, times, angle, speed, acc, load, K, _begin(K, x_in.size), cfg, OUT,
+                   states, log, log_cap)
 
 
 @jit

@@ -17,7 +17,7 @@ source          free names (the level's kernels)       instances
 :func:`points`  ``_begin`` (work arrays), ``_advance`` ``rk4_loop._points``,
                 (one communication step: step rule,    ``multibody_loops._points``
                 guard, events, checks), ``_outputs``
-:func:`held`    ``_points``                            ``rk4_loop._held``, ``multibody_loops._held``
+:func:`held`    ``_points``, ``_begin``                ``rk4_loop._held``, ``multibody_loops._held``
 ==============  =====================================  ===========================================
 
 Levels 1-2's ``_advance`` is ``rk4_loop._interval`` (the stable-step guard at every step, the
@@ -117,27 +117,29 @@ def verlet(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
     return 1
 
 
-def points(x_in, x_out, times, angle, speed, acc, load, K, cfg, OUT, states, log, log_cap):
+def points(x_in, x_out, times, angle, speed, acc, load, K, S, cfg, OUT, states, log, log_cap):
     """Integrate from (times[0], x_in) through the communication points ``times`` (inputs given
     there: angle, speed, acc, load), leaving ``x_in`` untouched and the state at the last point
-    reached in ``x_out``. ``K``: the level's constant arrays (a tuple), ``cfg`` the step rule
-    (``chainmodel.integrate.FixedStepper.cfg``). ``OUT[i]`` receives the outputs at times[i]
-    for i >= 1 (OUT may have no rows: not wanted), ``states[i]`` the state (likewise;
-    states[0] = x_in). At most ``log_cap`` event times per communication step go to the ring
-    buffer ``log``, in order from index 0.
+    reached in ``x_out``. ``K``: the level's constant arrays (a tuple), ``S`` its work arrays
+    (``_begin(K, n)``, made by the caller: this loop allocates nothing and runs without
+    reference counting), ``cfg`` the step rule (``chainmodel.integrate.FixedStepper.cfg``).
+    ``OUT[i]`` receives the outputs at times[i] for i >= 1 (OUT may have no rows: not wanted),
+    ``states[i]`` the state (likewise; states[0] = x_in). At most ``log_cap`` event times per
+    communication step go to the ring buffer ``log``, in order from index 0.
 
     Each communication step is the level's ``_advance`` (returning status, steps, events,
     evaluations, t_status, omega); the outputs at its end are the level's ``_outputs``
-    (returning its evaluations). Returns (reached, status, steps, events, rhs_evaluations,
-    logged, t_status, omega): ``reached`` the index of the last communication point
-    completed (len(times) - 1 on success), status STATUS_OK, the level's status of the step
-    that failed, or STATUS_OUTPUTS (an output not finite, its row filled); t_status and omega
-    where it happened."""
+    (returning its evaluations); both are inlined here (chainmodel._numba.jit_inline: a call
+    passing two dozen arrays cost 4% of levels 1-2's run at one step per point).
+
+    Returns (reached, status, steps, events, rhs_evaluations, logged, t_status, omega):
+    ``reached`` the index of the last communication point completed (len(times) - 1 on
+    success), status STATUS_OK, the level's status of the step that failed, or STATUS_OUTPUTS
+    (an output not finite, its row filled); t_status and omega where it happened."""
     n = x_in.size
     x = x_out
     for j in range(n):
         x[j] = x_in[j]
-    S = _begin(K, n)  # noqa: F821 - the level's work arrays
     want_out = OUT.shape[0] > 0
     want_states = states.shape[0] > 0
     if want_states:
@@ -188,5 +190,6 @@ def held(x_in, x_out, t0, t1, a0, w0, acc, load, K, cfg, OUT, log):
     load2[0] = load
     load2[1] = load
     states = np.empty((0, x_in.size))
-    return _points(x_in, x_out, times, angle, speed, acc2, load2, K, cfg, OUT,  # noqa: F821
+    S = _begin(K, x_in.size)  # noqa: F821 - the level's work arrays
+    return _points(x_in, x_out, times, angle, speed, acc2, load2, K, S, cfg, OUT,  # noqa: F821
                    states, log, log.size)
