@@ -21,7 +21,7 @@ from .._numba import jit, jit_inline, jit_noalloc, quiet_when_plain
 from . import stepping
 from .stepping import STATUS_NONFINITE, STATUS_OK, STATUS_UNSTABLE, instance
 from .multibody_layout import (CF_LIMIT, CF_MAX, CF_STAB, CF_STEP, CF_THETA, I_RIGID, Workspace)
-from .multibody_forces import accelerations, forces_pass, geometry_pass, omega_bound
+from .multibody_forces import accelerations, forces_pass, omega_bound
 from .multibody_outputs import outputs_row
 
 __all__ = ["hermite", "fixed_steps", "points_loop", "held_loop", "run_fixed", "run_points",
@@ -93,7 +93,7 @@ def fixed_steps(method, x, t0, h, nsteps, c, P, W3, k1, k2, k3, k4, xt, st, star
     or the index of the step after which the state diverged (Verlet: the force law's status
     at the step's evaluation; RK4: a non-finite state).
 
-    Verlet evaluates the position-dependent forces once per step (:func:`geometry_pass` at
+    Verlet evaluates the position-dependent forces once per step (``geometry_pass`` at
     the new positions) and the velocity-dependent pass twice (:func:`forces_pass`: at the
     half-step velocity for the second half kick, at the end velocity for the next step's
     first), the numbers of two full evaluations. ``started``: the acceleration half of ``k1``

@@ -63,7 +63,8 @@ from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
            "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
-           "STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE"]
+           "STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE",
+           "STATUS_OUTPUTS"]
 
 # --- the inputs of one communication step ------------------------------------------------------
 C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
