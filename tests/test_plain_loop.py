@@ -68,6 +68,16 @@ def test_every_level_runs_the_one_loop_source(module, name, source, kernels):
         assert fn.__globals__[kernel] is bound, kernel
 
 
-def test_the_levels_share_the_status_codes():
-    for name in ("STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_OUTPUTS"):
-        assert getattr(multibody_loops, name, getattr(stepping, name)) == getattr(rk4_loop, name)
+def test_the_status_codes_are_defined_once():
+    """Levels 1-3 report through the codes of chainmodel.kernels.stepping: no level module
+    assigns a STATUS_* name of its own (level 3 used the same numbers as literals)."""
+    import ast
+    import inspect
+    for module in (rk4_loop, multibody_loops):
+        tree = ast.parse(inspect.getsource(module))
+        assigned = {t.id for node in ast.walk(tree) if isinstance(node, ast.Assign)
+                    for t in node.targets if isinstance(t, ast.Name)}
+        assert not {n for n in assigned if n.startswith("STATUS_")}, module.__name__
+    for name in ("STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE",
+                 "STATUS_OUTPUTS"):
+        assert getattr(rk4_loop, name) == getattr(stepping, name), name
