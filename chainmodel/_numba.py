@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "enabled",
-           "quiet_when_plain"]
+__all__ = ["numba_requested", "import_numba", "njit", "jit", "jit_noalloc", "jit_inline",
+           "enabled", "quiet_when_plain"]
 
 
 def numba_requested() -> bool:
@@ -75,6 +75,17 @@ def jit_noalloc(fn):
     The arithmetic is the same: results are bitwise those of :func:`jit`."""
     if _ENABLED:
         return njit(fn, fastmath=False, _nrt=False)
+    fn.py_func = fn
+    return fn
+
+
+def jit_inline(fn):
+    """:func:`jit_noalloc` for a small kernel that numba inlines into each caller (its IR,
+    ``inline="always"``) instead of calling it: level 3's step rules and force-law wrapper
+    (chainmodel.kernels.multibody_loops), where a call passing a dozen arrays cost 5% of a
+    step (docs/performance.md, issue 20 item 1). The arithmetic is the same."""
+    if _ENABLED:
+        return njit(fn, fastmath=False, _nrt=False, inline="always")
     fn.py_func = fn
     return fn
 

@@ -128,6 +128,62 @@ def test_two_processes_compiling_at_once_are_safe(tmp_path):
     assert len(index) == 1
 
 
+LEVELS = """
+from chainmodel._numba import jit_noalloc
+from chainmodel.kernels.stepping import instance
+
+
+@jit_noalloc
+def double(x):
+    return 2.0 * x
+
+
+@jit_noalloc
+def square(x):
+    return x * x
+
+
+def source(x):
+    return _kernel(x) + 1.0
+
+
+one = instance(source, "one", __name__, _kernel=double)
+two = instance(source, "two", __name__, _kernel=square)
+"""
+
+RUN_LEVELS = """
+import json
+from toy.levels import one, two
+print(json.dumps({"values": [one(3.0), two(3.0)],
+                  "hits": [sum(k.stats.cache_hits.values()) for k in (one, two)],
+                  "misses": [sum(k.stats.cache_misses.values()) for k in (one, two)]}))
+"""
+
+
+def test_instances_of_one_loop_source_are_cached_apart(tmp_path):
+    """chainmodel.kernels.stepping.instance builds each level's loop from one source with the
+    level's kernels bound (same bytecode, other globals): each instance has its own cache
+    entry, a later process loads both without compiling, and neither loads the other's."""
+    pkg = write_toy(tmp_path / "a")
+    (pkg / "levels.py").write_text(LEVELS)
+    cache = tmp_path / "cache"
+    env = dict(os.environ, CHAINMODEL_CACHE_DIR=str(cache),
+               PYTHONPATH=os.pathsep.join([str(tmp_path / "a"), str(ROOT)]))
+    env.pop("CHAINMODEL_NUMBA", None)
+    runs = []
+    for _ in range(2):
+        proc = subprocess.run([sys.executable, "-c", RUN_LEVELS], capture_output=True,
+                              text=True, env=env, cwd=tmp_path / "a")
+        assert proc.returncode == 0, proc.stderr
+        runs.append((json.loads(proc.stdout), proc.stderr))
+    (first, err1), (second, err2) = runs
+    assert first["values"] == second["values"] == [2.0 * 3.0 + 1.0, 3.0 * 3.0 + 1.0]
+    assert (first["hits"], first["misses"]) == ([0, 0], [1, 1]) and NOTICE in err1
+    assert (second["hits"], second["misses"]) == ([1, 1], [0, 0]) and NOTICE not in err2
+    names = sorted(p.name.split("-")[0] for p in (cache / "numba" / "toy.levels").glob("*.nbi"))
+    assert {"one", "two"} <= set(names)
+
+
 def test_numba_global_configuration_is_untouched(tmp_path):
     """The FMU lives in someone else's Python: their numba caching must behave as before."""
     script = textwrap.dedent("""

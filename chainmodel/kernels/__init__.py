@@ -10,12 +10,15 @@ module                 holds
 ``spans``              levels 1-2: both spans' polygon geometry, tensions, sprocket equations, modes
 ``kinematic``          level 0: the four-bar rotation and the outputs
 ``equilibrium``        levels 1-2: the static equilibrium at rest (initial state)
-``rk4_loop``           the fixed-step loop written once (step rule, guard, events, outputs)
+``stepping``           the loop written once for every level: the output sampling and status
+                       loop, the held step, the RK4 and Verlet steps (sources; each level
+                       compiles its own instance with its kernels bound)
+``rk4_loop``           levels 1-2: the communication step (guard, events) and outputs
 ``plain_loop``         rk4_loop's loop as plain Python on any Model's rhs
 ``multibody_layout``   level 3: parameter vector, scratch rows, step-rule vector, Workspace
 ``multibody_forces``   level 3: the force law (positions' pass, velocities' pass), frequency bound
 ``multibody_outputs``  level 3: seated rollers, span ends, the output row
-``multibody_loops``    level 3: the Verlet / RK4 loops through communication points
+``multibody_loops``    level 3: the communication step (guard, Verlet / RK4 steps) and outputs
 =====================  ==========================================================================
 
 :data:`TWINS` lists, once, every compiled kernel that Python code calls; its plain twin is the

@@ -62,7 +62,6 @@ class Workspace:
         M = n_rollers
         n = 2 + 2 * M
         self.acc = np.zeros(n)
-        self.acc2 = np.zeros(n)
         self.k = [np.zeros(2 * n) for _ in range(4)]
         self.xt = np.zeros(2 * n)
         self.tension = np.zeros(M)

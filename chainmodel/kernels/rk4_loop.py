@@ -1,10 +1,14 @@
-"""The fixed-step loop, written once: the internal step rule, the stable-step guard, the event
-location and crossing, and - for levels 1 (torsional) and 2 (modal), compiled on their kernel -
-the outputs, over one or many communication steps in one call (numba; the same source as plain
-Python with ``CHAINMODEL_NUMBA=0``). Every other fixed-step run (a model without kernels, the
-``integrate.python_loop_model`` twin) runs these functions' own source on the model interface
-(:mod:`chainmodel.kernels.plain_loop` rebinds the six names that touch the model:
-``_rhs_at``, ``_switch``, ``_omega_at``, ``_event_step``, ``_after_step``, ``_step_from``).
+"""The fixed-step loop of levels 1 (torsional) and 2 (modal): the stable-step guard, the event
+location and crossing, and the outputs, over one or many communication steps in one call
+(numba; the same source as plain Python with ``CHAINMODEL_NUMBA=0``). The output sampling and
+status loop, the held step and the RK4 and Verlet steps are this level's instances of the
+sources in :mod:`chainmodel.kernels.stepping` (written once for every level: ``_points``,
+``_held``, ``_rk4_from``, ``_verlet_from``); :func:`_advance` (one communication step:
+:func:`_interval`) and :func:`_outputs` are what this level plugs into them. Every other
+fixed-step run (a model without kernels, the ``integrate.python_loop_model`` twin) runs
+these functions' own source on the model interface (:mod:`chainmodel.kernels.plain_loop`
+rebinds the six names that touch the model: ``_rhs_at``, ``_switch``, ``_omega_at``,
+``_event_step``, ``_after_step``, ``_step_from``).
 
 **Inputs inside a communication step** [t0, t1]: the input-shaft angle is the cubic Hermite
 interpolant of the (angle, speed) given at both ends, its acceleration the interpolant's second
@@ -43,7 +47,10 @@ import math
 
 import numpy as np
 
-from .._numba import jit, jit_noalloc
+from .._numba import jit, jit_inline, jit_noalloc
+from . import stepping
+from .stepping import (STATUS_AMPLITUDE, STATUS_NONFINITE, STATUS_OK, STATUS_OUTPUTS,
+                       STATUS_UNSTABLE, finite, instance)
 from ..outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION,  # noqa: F401
                       O_CONTACT_MAX_FORCE, O_DRIVEN_ACCELERATION, O_DRIVEN_ANGLE, O_DRIVEN_SPEED,
                       O_DRIVER_ANGLE, O_DRIVER_SPEED, O_INPUT_SHAFT_TORQUE, O_SLACK_SPAN_TENSION,
@@ -56,7 +63,8 @@ from .spans import A_LOWER_TIGHT
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
            "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
-           "STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE"]
+           "STATUS_OK", "STATUS_NONFINITE", "STATUS_UNSTABLE", "STATUS_AMPLITUDE",
+           "STATUS_OUTPUTS"]
 
 # --- the inputs of one communication step ------------------------------------------------------
 C_T0, C_DT, C_A0, C_W0, C_A1, C_W1, C_ACC0, C_ACC1, C_L0, C_L1 = range(10)
@@ -78,11 +86,6 @@ CF_SIZE = 5
 Q_W_SPROCKET, Q_RATIO, Q_SAG, Q_AMP_LIMIT, Q_EVENT_ANGLE, Q_CENTRIFUGAL = range(6)
 Q_SIZE = 6
 
-STATUS_OK = 0
-STATUS_NONFINITE = 1     # a state became non-finite
-STATUS_UNSTABLE = 2      # the explicit step is above the stable limit of the current state
-STATUS_AMPLITUDE = 3     # a span mode's amplitude left the string model's range (level 2)
-STATUS_OUTPUTS = 4       # an output is not finite (its row is filled, for the message)
 
 W_ROWS = 14     # work vectors of the state's size (see _interval)
 V_ROWS = 9      # work vectors of the 6 switching functions: g0, g1, gh, gm, glo, flo, fhi, ga, gb
@@ -141,42 +144,9 @@ def _rhs_at(t, x, c, G, P, dx, aux):
     evaluate_rate(x, th, w, acc, load, G, P, dx, aux)
 
 
-@jit_noalloc
-def _rk4_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
-    """One RK4 step with k1 = f(t, x) already in ``k1`` (three new evaluations)."""
-    n = x.size
-    for i in range(n):
-        tmp[i] = x[i] + 0.5 * h * k1[i]
-    _rhs_at(t + 0.5 * h, tmp, c, G, P, k2, aux)
-    for i in range(n):
-        tmp[i] = x[i] + 0.5 * h * k2[i]
-    _rhs_at(t + 0.5 * h, tmp, c, G, P, k3, aux)
-    for i in range(n):
-        tmp[i] = x[i] + h * k3[i]
-    _rhs_at(t + h, tmp, c, G, P, k4, aux)
-    for i in range(n):
-        out[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    return 3
-
-
-@jit_noalloc
-def _verlet_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, out):
-    """One velocity Verlet (kick-drift-kick) step of a second-order state [q, v] with
-    k1 = f(t, x) already in ``k1`` (one new evaluation): v_half = v + h/2 a(t, x),
-    q1 = q + h v_half, v1 = v_half + h/2 a(t + h, [q1, v_half]) (velocity-dependent forces
-    see the half-step velocity). Same arguments as :func:`_rk4_from` (k3, k4 unused); the
-    loop on the model interface runs it for ``verlet`` (level 3's compiled loop is its own,
-    chainmodel.kernels.multibody_loops)."""
-    n = x.size // 2
-    for i in range(n):
-        v_half = x[n + i] + 0.5 * h * k1[n + i]
-        tmp[i] = x[i] + h * v_half
-        tmp[n + i] = v_half
-    _rhs_at(t + h, tmp, c, G, P, k2, aux)
-    for i in range(n):
-        out[i] = tmp[i]
-        out[n + i] = tmp[n + i] + 0.5 * h * k2[n + i]
-    return 1
+#: the step rules, written once in chainmodel.kernels.stepping, on this level's right-hand side
+_rk4_from = instance(stepping.rk4, "_rk4_from", __name__, _rhs_at=_rhs_at)
+_verlet_from = instance(stepping.verlet, "_verlet_from", __name__, _rhs_at=_rhs_at)
 
 
 #: the method's step from (t, x) with f(t, x) known, returning its new evaluations: RK4 in the
@@ -595,20 +565,12 @@ def fill_outputs(x, aux, w_in, P, Q, out):
 
 
 @jit_noalloc
-def _finite(v):
-    for k in range(v.size):
-        if not math.isfinite(v[k]):
-            return False
-    return True
-
-
-@jit_noalloc
 def outputs_into(x, th, w, acc, load, G, P, Q, dx, aux, out):
     """Every output at (x, inputs) into ``out`` (one kernel evaluation); True when all are
     finite."""
     evaluate(x, th, w, acc, load, G, P, dx, aux)
     fill_outputs(x, aux, w, P, Q, out)
-    return _finite(out)
+    return finite(out)
 
 
 @jit
@@ -633,86 +595,74 @@ def _check(x, P, Q):
 
 
 @jit
-def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OUT, states, log,
-                   log_cap):
-    """Integrate from (times[0], x_in) through the communication points ``times`` (inputs given
-    there: angle, speed, acc, load; cubic Hermite inside each step, module docstring), leaving
-    ``x_in`` untouched and the state at the last point reached in ``x_out``. ``OUT[i]`` receives
-    the outputs at times[i] for i >= 1 (OUT may have no rows: not wanted), ``states[i]`` the
-    state (likewise; states[0] = x_in). At most ``log_cap`` event times per communication step go
-    to the ring buffer ``log``, in order from index 0.
+def _begin(K, n):
+    """The work arrays of :func:`_advance`: the inputs c, the state-sized rows W, the switching
+    functions' rows V, the kernel's auxiliary values and a flag ``started`` (W[3], V[0] and
+    aux hold the evaluation at the current point with its own inputs), all in one allocation
+    (the FMU's held step makes them at every communication step)."""
+    w_end = C_SIZE + 1 + W_ROWS * n
+    v_end = w_end + V_ROWS * 6
+    buf = np.empty(v_end + A_SIZE)
+    buf[C_SIZE] = 0.0
+    return (buf[:C_SIZE], buf[C_SIZE + 1:w_end].reshape((W_ROWS, n)),
+            buf[w_end:v_end].reshape((V_ROWS, 6)), buf[v_end:], buf[C_SIZE:C_SIZE + 1])
 
-    Returns (reached, status, steps, events, rhs_evaluations, logged, t_status, omega):
-    ``reached`` the index of the last communication point completed (len(times) - 1 on success),
-    status as :func:`_interval` or STATUS_AMPLITUDE (checked at each point), t_status and omega
-    where it happened."""
-    n = x_in.size
-    x = x_out
-    for j in range(n):
-        x[j] = x_in[j]
-    W = np.empty((W_ROWS, n))
-    V = np.empty((V_ROWS, 6))
-    aux = np.empty(A_SIZE)
-    c = np.empty(C_SIZE)
-    want_out = OUT.shape[0] > 0
-    want_states = states.shape[0] > 0
-    if want_states:
-        for j in range(n):
-            states[0, j] = x[j]
-    total = 0
-    events = 0
-    evals = 0
-    logged = 0
-    started = False
-    for i in range(1, times.size):
-        t0 = times[i - 1]
-        t1 = times[i]
-        c[C_T0] = t0
-        c[C_DT] = t1 - t0
-        c[C_A0] = angle[i - 1]
-        c[C_W0] = speed[i - 1]
-        c[C_A1] = angle[i]
-        c[C_W1] = speed[i]
-        c[C_ACC0] = acc[i - 1]
-        c[C_ACC1] = acc[i]
-        c[C_L0] = load[i - 1]
-        c[C_L1] = load[i]
-        c[C_IN_T] = math.nan        # a new interpolant: nothing evaluated on it yet
-        if started:
-            # the evaluation that ended the last step was made at this point's own inputs;
-            # it starts this step if the interpolant starts from the same ones (held or
-            # constant acceleration): an evaluation is a pure function of (x, inputs)
-            th, ww, aa, ld = _inputs(t0, c)
-            started = (th == angle[i - 1] and ww == speed[i - 1] and aa == acc[i - 1]
-                       and ld == load[i - 1])
-        status, m, e, v, t_st, w = _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, logged,
-                                            log_cap, started)
-        total += m
-        events += e
-        evals += v
-        logged += min(e, log_cap)
-        if status == STATUS_OK:
-            status = _check(x, P, Q)
-            t_st = t1
-        if status != STATUS_OK:
-            return i - 1, status, total, events, evals, logged, t_st, w
-        if want_states:
-            for j in range(n):
-                states[i, j] = x[j]
+
+@jit_inline
+def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_cap):
+    """Communication step i of :func:`stepping.points`: :func:`_interval` on the cubic Hermite
+    of the inputs at both ends, then the span modes' amplitude check."""
+    G, P, Q = K
+    c, W, V, aux, flags = S
+    t0 = times[i - 1]
+    t1 = times[i]
+    c[C_T0] = t0
+    c[C_DT] = t1 - t0
+    c[C_A0] = angle[i - 1]
+    c[C_W0] = speed[i - 1]
+    c[C_A1] = angle[i]
+    c[C_W1] = speed[i]
+    c[C_ACC0] = acc[i - 1]
+    c[C_ACC1] = acc[i]
+    c[C_L0] = load[i - 1]
+    c[C_L1] = load[i]
+    c[C_IN_T] = math.nan        # a new interpolant: nothing evaluated on it yet
+    started = flags[0] != 0.0
+    if started:
+        # the evaluation that ended the last step was made at this point's own inputs;
+        # it starts this step if the interpolant starts from the same ones (held or
+        # constant acceleration): an evaluation is a pure function of (x, inputs)
+        th, ww, aa, ld = _inputs(t0, c)
+        started = (th == angle[i - 1] and ww == speed[i - 1] and aa == acc[i - 1]
+                   and ld == load[i - 1])
+    status, m, e, v, t_st, w = _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, logged,
+                                        log_cap, started)
+    if status == STATUS_OK:
+        status = _check(x, P, Q)
+        t_st = t1
+    if status == STATUS_OK:
         th, ww, aa, ld = _inputs_at(t1, c)     # the step end's, usually remembered
         started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
-        if want_out:
-            if not started:
-                # the point's inputs differ from the interpolant's end values (a change of
-                # acceleration, round-off of the load): evaluate at the point's own inputs,
-                # which also starts the next step
-                _switch_at(x, angle[i], speed[i], acc[i], load[i], G, P, W[3], aux, V[0])
-                evals += 1
-                started = True
-            fill_outputs(x, aux, speed[i], P, Q, OUT[i])
-            if not _finite(OUT[i]):
-                return i - 1, STATUS_OUTPUTS, total, events, evals, logged, t1, 0.0
-    return times.size - 1, STATUS_OK, total, events, evals, logged, times[-1], 0.0
+        flags[0] = 1.0 if started else 0.0
+    return status, m, e, v, t_st, w
+
+
+@jit_inline
+def _outputs(i, x, angle, speed, acc, load, K, S, out):
+    """The outputs at point i into ``out``; returns the evaluations made (0 when the one that
+    ended the last step was at the point's own inputs)."""
+    G, P, Q = K
+    c, W, V, aux, flags = S
+    e = 0
+    if flags[0] == 0.0:
+        # the point's inputs differ from the interpolant's end values (a change of
+        # acceleration, round-off of the load): evaluate at the point's own inputs,
+        # which also starts the next step
+        _switch_at(x, angle[i], speed[i], acc[i], load[i], G, P, W[3], aux, V[0])
+        e = 1
+        flags[0] = 1.0
+    fill_outputs(x, aux, speed[i], P, Q, out)
+    return e
 
 
 @jit_noalloc
@@ -723,27 +673,29 @@ def _switch_at(x, th, w, acc, load, G, P, dx, aux, g):
         g[i] = aux[A_G_UP + i]
 
 
+#: the sampling loop and the held step, written once in chainmodel.kernels.stepping
+_points = instance(stepping.points, "_points", __name__, _advance=_advance, _outputs=_outputs)
+_held = instance(stepping.held, "_held", __name__, noalloc=False, _points=_points,
+                 _begin=_begin)
+
+
+@jit
+def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OUT, states, log,
+                   log_cap):
+    """Integrate from (times[0], x_in) through the communication points ``times`` (inputs given
+    there: angle, speed, acc, load; cubic Hermite inside each step, module docstring), leaving
+    ``x_in`` untouched and the state at the last point reached in ``x_out``: this level's
+    instance of :func:`chainmodel.kernels.stepping.points` (its docstring: OUT, states, log,
+    the result). Status as :func:`_interval`, or STATUS_AMPLITUDE (checked at each point) or
+    STATUS_OUTPUTS."""
+    K = (G, P, Q)
+    return _points(x_in, x_out, times, angle, speed, acc, load, K, _begin(K, x_in.size), cfg, OUT,
+                   states, log, log_cap)
+
+
 @jit
 def advance_held(x_in, x_out, t0, t1, a0, w0, acc, load, G, P, Q, cfg, OUT, log):
-    """One communication step [t0, t1] with the inputs held first-order (the FMU's hold: the
-    angle advances at the held speed; speed, acceleration and load held): :func:`advance_points`
-    with times (t0, t1), angle (a0, a0 + w0 (t1 - t0)) and the rest repeated, so the same
-    arithmetic as the batched path; the outputs at t1 go to OUT[1] (OUT has two rows)."""
-    times = np.empty(2)
-    angle = np.empty(2)
-    speed = np.empty(2)
-    acc2 = np.empty(2)
-    load2 = np.empty(2)
-    times[0] = t0
-    times[1] = t1
-    angle[0] = a0
-    angle[1] = a0 + w0 * (t1 - t0)
-    speed[0] = w0
-    speed[1] = w0
-    acc2[0] = acc
-    acc2[1] = acc
-    load2[0] = load
-    load2[1] = load
-    states = np.empty((0, x_in.size))
-    return advance_points(x_in, x_out, times, angle, speed, acc2, load2, G, P, Q, cfg, OUT, states,
-                          log, log.size)
+    """One communication step [t0, t1] with the inputs held first-order (the FMU's hold):
+    this level's instance of :func:`chainmodel.kernels.stepping.held`; the outputs at t1 go to
+    OUT[1] (OUT has two rows)."""
+    return _held(x_in, x_out, t0, t1, a0, w0, acc, load, (G, P, Q), cfg, OUT, log)
