@@ -236,10 +236,9 @@ def span_tensions(result, mask) -> tuple[np.ndarray, np.ndarray, str]:
     If the result has the two physical spans' outputs (:data:`PHYSICAL_SPANS`), the tight span
     is the one of larger mean over the window (the span the driver pulls under steady forward
     power flow) and the slack one the other; otherwise the ``tight_span`` / ``slack_span``
-    outputs are read as they are. Those are per physical span once the library names the
-    spans by their role (the driver's pull); before that they are the momentary larger and
-    smaller tension, whose means near a resonance mix the load with the oscillation
-    (docs/tradeoff.md "Per-span means"). The third value says which source was used."""
+    outputs are read as they are: each is one physical span, since the library names the
+    spans by their role, the driver's pull (kernels/span_roles.py; docs/tradeoff.md "Per-span
+    means"). The third value says which source was used."""
     names = set(result.names)
     if all(n in names for n in PHYSICAL_SPANS):
         a, b = (np.asarray(result[n])[mask] for n in PHYSICAL_SPANS)
