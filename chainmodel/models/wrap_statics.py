@@ -37,14 +37,11 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .. import parameters as PRM
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 from . import static_tension as ST
-from .multibody import MultibodyModel
-from .multibody_statics import solve_statics, static_state
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
            "SLACK_SHARE", "hangs_on_its_sag", "sag_tension"]
@@ -89,6 +86,10 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
+    # level 3 and its statics are imported when first needed: levels 0-2 import this module
+    # and most of their runs never ask for them
+    from .multibody import MultibodyModel
+    from .multibody_statics import solve_statics, static_state
     p3 = {k: v for k, v in params.items() if k in PRM.BY_NAME}
     model = MultibodyModel(drive, p3)
     rest = static_state(model)
@@ -190,6 +191,8 @@ def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     or None where the statics find no equilibrium; cached per drive and parameters."""
     key = ("sag",) + _key(drive, params)
     if key not in _CACHE:
+        from .multibody import MultibodyModel          # when first needed (see wrap_fit)
+        from .multibody_statics import static_state
         try:
             t0 = static_state(MultibodyModel(drive, {k: v for k, v in params.items()
                                                       if k in PRM.BY_NAME})).mean_tension
@@ -239,6 +242,9 @@ def _slope(raw, b):
 
 def _compliance(target, n_up, n_low, k, su, sl):
     """c with su / (n_up / k + c) + sl / (n_low / k + c) = target (span stiffness per R_o^2)."""
+    # scipy.optimize imported with this module made an FMU's every fmi2Instantiate grow the
+    # process (1.3 MB over 500; tests/test_fmu_embedding.py): imported where first needed
+    from scipy.optimize import brentq
 
     def stiff(c):
         return su / (n_up / k + c) + sl / (n_low / k + c)
@@ -254,6 +260,7 @@ def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
     """The slack span's tension of the level-1 law at rest under a load whose tension
     difference is dt: both spans' raw tensions move by their stiffness times one rotation,
     softplus(t0 + k_u u) - softplus(t0 - k_l u) = dt."""
+    from scipy.optimize import brentq
     ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
 
     def diff(u):
@@ -268,6 +275,7 @@ def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
 
 def _softness(t0, slack3, c, n_up, n_low, k, dt):
     """b with which the level-1 law's slack span under dt is level 3's slack3 (T_0 kept)."""
+    from scipy.optimize import brentq
 
     def err(b):
         return _split_slack(_linear(t0, b), b, c, n_up, n_low, k, dt) - slack3
