@@ -291,6 +291,7 @@ def _softness(t0, slack3, c, n_up, n_low, k, dt):
 def _loaded(model, rest, load):
     """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
     span's load step is small next to its distance from the straight layout)."""
+    from .multibody_statics import solve_statics
     try:
         return solve_statics(model, 0.0, load, start=rest.state)
     except ValueError:
