@@ -24,43 +24,25 @@ from chainmodel.integrate import Verlet
 from chainmodel.models import Inputs
 from chainmodel.models.multibody import MultibodyModel
 from chainmodel.scene import load_scene
+from ringdown_check import ring, two_inertia_frequency
 
 
 def _estimate(name):
-    """Analytical driven-sprocket torsional frequency [Hz] (module docstring); the mode with the
-    largest share of its kinetic energy in the driven sprocket."""
+    """Analytical driven-sprocket torsional frequency [Hz] (module docstring): each span's links
+    in series with the seat ladder at both ends, the two spans in parallel."""
     sc = load_scene(name, fidelity=1)
-    p, d = sc.parameters, sc.drive
-    m1 = sc.model()
-    r = m1.reference
+    p = sc.parameters
+    r = sc.model().reference
     kl, kc = p["chain.link_stiffness"], p["contact.stiffness"]
     k_seat = 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
     assert k_seat == pytest.approx(kc + kl * k_seat / (kl + k_seat), rel=1e-12)
     k = sum(1.0 / (n / kl + 2.0 / k_seat) for n in (r["n_up"], r["n_low"]))
-    rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
-    M = m1.mass_matrix()
-    if p["input_shaft.rigid"]:
-        return math.sqrt(ro * ro * k / M[1, 1]) / (2 * math.pi)
-    K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
-    K[0, 0] += p["input_shaft.stiffness"]
-    lam, vec = np.linalg.eig(np.linalg.solve(M, K))
-    share = [M[1, 1] * v[1] ** 2 / (v @ M @ v) for v in np.real(vec).T]
-    return math.sqrt(abs(lam[int(np.argmax(share))].real)) / (2 * math.pi)
+    return two_inertia_frequency(sc, k)
 
 
 def _ring(name, level, est):
-    """Frequency [Hz] of the driven speed's ring-down after a sudden start to 5 rpm: the
-    spectral peak (Hann window, zero-padded) within 0.6-1.4 x the estimate."""
-    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=5.0, ramp_time=0.0,
-                            load_torque=0.0, duration=0.5, output_interval=5e-5)
-    m = r.time >= 0.02
-    t, w = r.time[m], r["driven.speed"][m]
-    x = (w - np.polyval(np.polyfit(t, w, 1), t)) * np.hanning(m.sum())
-    n = 16 * x.size
-    spec = np.abs(np.fft.rfft(x, n))
-    f = np.fft.rfftfreq(n, t[1] - t[0])
-    spec[(f < 0.6 * est) | (f > 1.4 * est)] = 0.0
-    return float(f[np.argmax(spec)])
+    """Ring-down frequency [Hz] within 0.6-1.4 x the estimate (ringdown_check.ring)."""
+    return ring(name, level, (0.6 * est, 1.4 * est))
 
 
 def test_xu2010_torsional_mode_level3_against_the_estimate_and_levels_1_2():
@@ -90,16 +72,8 @@ def test_c1_level1_with_seat_compliance_is_the_estimate():
     """Level 1 with the seat ladder in series with each span (torsional.seat_compliance) is the
     analytical two-inertia estimate: the only compliance it adds is that ladder."""
     est = _estimate("C1")
-    r = chainmodel.simulate("C1", fidelity=1, input_speed_rpm=5.0, ramp_time=0.0,
-                            load_torque=0.0, duration=0.5, output_interval=5e-5,
-                            torsional_seat_compliance=True)
-    m = r.time >= 0.02
-    t, w = r.time[m], r["driven.speed"][m]
-    x = (w - np.polyval(np.polyfit(t, w, 1), t)) * np.hanning(m.sum())
-    spec = np.abs(np.fft.rfft(x, 16 * x.size))
-    f = np.fft.rfftfreq(16 * x.size, t[1] - t[0])
-    spec[(f < 0.6 * est) | (f > 1.4 * est)] = 0.0
-    assert float(f[np.argmax(spec)]) == pytest.approx(est, rel=0.03)
+    f = ring("C1", 1, (0.6 * est, 1.4 * est), torsional_seat_compliance=True)
+    assert f == pytest.approx(est, rel=0.03)
 
 
 def test_c1_energy_bounded_without_dissipation():

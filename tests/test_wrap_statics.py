@@ -25,6 +25,7 @@ from chainmodel.models import Inputs
 from chainmodel.models.multibody_statics import static_state
 from chainmodel.models.wrap_statics import wrap_fit
 from chainmodel.scene import load_scene
+from ringdown_check import ring, two_inertia_frequency
 
 FAN = "examples/scenes/08b_fan_1500rpm.toml"
 ON = {"torsional_wrap_statics": True}
@@ -75,35 +76,12 @@ def test_fan_without_pretension_static_tension_agrees_at_every_level(dc, options
     assert mean == pytest.approx(t3, rel=0.05)
 
 
-def _ring(name, level, band, **kw):
-    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=5.0, ramp_time=0.0,
-                            load_torque=0.0, duration=0.5, output_interval=5e-5, **kw)
-    m = r.time >= 0.02
-    t, w = r.time[m], r["driven.speed"][m]
-    x = (w - np.polyval(np.polyfit(t, w, 1), t)) * np.hanning(m.sum())
-    n = 16 * x.size
-    spec = np.abs(np.fft.rfft(x, n))
-    f = np.fft.rfftfreq(n, t[1] - t[0])
-    spec[(f < band[0]) | (f > band[1])] = 0.0
-    return float(f[np.argmax(spec)])
-
-
 def _estimate_k3(name, **kw):
-    """Two-inertia estimate [Hz] with the condensed stiffness K_3 of level 3's statics: level
-    1's mass matrix, the spans' stiffness K_3 / R_o^2 on the sprockets' pitch radii, the input
-    shaft's spring; the mode with most of its kinetic energy in the driven sprocket."""
+    """Two-inertia estimate [Hz] with the condensed stiffness K_3 of level 3's statics: the
+    spans' stiffness K_3 / R_o^2 on the sprockets' pitch radii (ringdown_check)."""
     sc = load_scene(name, fidelity=1, **kw)
-    p, d = sc.parameters, sc.drive
-    k = wrap_fit(d, p).stiffness / d.driven.pitch_radius ** 2
-    M = sc.model().mass_matrix()
-    rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
-    if p["input_shaft.rigid"]:
-        return math.sqrt(ro * ro * k / M[1, 1]) / (2 * math.pi)
-    K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
-    K[0, 0] += p["input_shaft.stiffness"]
-    lam, vec = np.linalg.eig(np.linalg.solve(M, K))
-    share = [M[1, 1] * v[1] ** 2 / (v @ M @ v) for v in np.real(vec).T]
-    return math.sqrt(abs(lam[int(np.argmax(share))].real)) / (2 * math.pi)
+    return two_inertia_frequency(sc, wrap_fit(sc.drive, sc.parameters).stiffness
+                                 / sc.drive.driven.pitch_radius ** 2)
 
 
 @pytest.mark.parametrize("name,kw,level", [
@@ -113,9 +91,9 @@ def _estimate_k3(name, **kw):
 def test_torsional_mode_levels_1_2_on_level3s_wrap(name, kw, level):
     est = _estimate_k3(name, **ON, **kw)
     band = (0.6 * est, 1.4 * est)
-    f3 = _ring(name, 3, band, **kw)
+    f3 = ring(name, 3, band, **kw)
     assert f3 == pytest.approx(est, rel=0.03)
-    f = _ring(name, level, band, **ON, **kw)
+    f = ring(name, level, band, **ON, **kw)
     assert f == pytest.approx(f3, rel=0.03)
     assert f == pytest.approx(est, rel=0.03)
 

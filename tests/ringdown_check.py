@@ -1,0 +1,51 @@
+"""The driven sprocket's torsional mode, measured and estimated independently of the models
+(issue 21 items 3 and 6; shared by tests/test_top_rung.py and tests/test_wrap_statics.py).
+
+* :func:`ring`: the driven speed's ring-down after a sudden start to 5 rpm without load, its
+  spectral peak (Hann window, 16x zero padding, linear trend removed) inside a band;
+* :func:`two_inertia_frequency`: the two-inertia system written here - level 1's mass matrix,
+  both spans as one spring of stiffness ``k_spans`` [N/m] acting on the sprockets' pitch radii,
+  the input shaft's spring - and its mode with the largest share of kinetic energy in the driven
+  sprocket.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import chainmodel
+
+
+def ring(name, level, band, **kw) -> float:
+    """Frequency [Hz] of the driven speed's ring-down (module docstring) within ``band``."""
+    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=5.0, ramp_time=0.0,
+                            load_torque=0.0, duration=0.5, output_interval=5e-5, **kw)
+    return peak_frequency(r, band)
+
+
+def peak_frequency(result, band) -> float:
+    """The driven speed's spectral peak [Hz] within ``band`` after 0.02 s."""
+    m = result.time >= 0.02
+    t, w = result.time[m], result["driven.speed"][m]
+    x = (w - np.polyval(np.polyfit(t, w, 1), t)) * np.hanning(m.sum())
+    n = 16 * x.size
+    spec = np.abs(np.fft.rfft(x, n))
+    f = np.fft.rfftfreq(n, t[1] - t[0])
+    spec[(f < band[0]) | (f > band[1])] = 0.0
+    return float(f[np.argmax(spec)])
+
+
+def two_inertia_frequency(scene, k_spans: float) -> float:
+    """Driven-sprocket mode [Hz] of the two-inertia system (module docstring)."""
+    p, d = scene.parameters, scene.drive
+    M = scene.model().mass_matrix()
+    rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
+    if p["input_shaft.rigid"]:
+        return math.sqrt(ro * ro * k_spans / M[1, 1]) / (2 * math.pi)
+    K = k_spans * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
+    K[0, 0] += p["input_shaft.stiffness"]
+    lam, vec = np.linalg.eig(np.linalg.solve(M, K))
+    share = [M[1, 1] * v[1] ** 2 / (v @ M @ v) for v in np.real(vec).T]
+    return math.sqrt(abs(lam[int(np.argmax(share))].real)) / (2 * math.pi)
