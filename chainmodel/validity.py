@@ -97,7 +97,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "penetration": "roller penetration beyond the seat clearance",
           "penetration_roller": "roller penetration beyond the roller radius",
           "teeth_skipped": "teeth skipped",
-          "driven_reversal": "driven sprocket reversing under forward drive"}
+          "driven_reversal": "driven sprocket reversing under forward drive",
+          "wrap_statics_unavailable": "torsional.wrap_statics not honoured"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -109,9 +110,25 @@ def chain_play(drive: Drive, params: Mapping[str, Any]) -> float:
 
 def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
     """The chain too long or too short for its centre distance by more than its play (module
-    docstring)."""
+    docstring), and an option the model could not honour (``torsional.wrap_statics``)."""
     if drive.links is None:
         return []
+    return _length_problems(drive, params) + _wrap_statics_problems(drive, params)
+
+
+def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
+    from .models.wrap_statics import unavailable
+    why = unavailable(drive, params)
+    if why is None:
+        return []
+    return [Problem("wrap_statics_unavailable", (
+        f"torsional.wrap_statics = true was not honoured: level 3's statics of this drive found "
+        f"no equilibrium ({why}), so levels 0-2 hold their span ends with the seat ladder "
+        f"(torsional.seat_compliance) instead; run level 3, or a drive whose chain does not "
+        f"rest a roller on a tooth tip (docs/reduced_models.md)"))]
+
+
+def _length_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
     lmin, lmean, lmax = _wrap_range(drive)
     M, p = drive.links, drive.pitch
     play = chain_play(drive, params)

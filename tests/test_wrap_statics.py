@@ -120,3 +120,28 @@ def test_xu2010_quasi_static_split_follows_level3s_statics(load):
     m = r.time >= 2.0
     assert r["tight_span.tension"][m].mean() == pytest.approx(t3, rel=0.03)
     assert r["slack_span.tension"][m].mean() == pytest.approx(s3, rel=0.12)
+
+
+def test_an_option_that_could_not_be_honoured_is_reported(monkeypatch):
+    """Where level 3's statics find no equilibrium, torsional.wrap_statics falls back to the
+    seat ladder and the result says so (a warning naming the option), never silently."""
+    from chainmodel.models import static_tension as ST
+    from chainmodel.models import wrap_statics as W
+
+    def no_equilibrium(drive, params):
+        raise ValueError("level 3 statics did not converge (forced by the test)")
+
+    monkeypatch.setattr(W, "wrap_fit", no_equilibrium)
+    monkeypatch.setattr(W, "_FAILED", {})
+    sc = load_scene("xu2010", fidelity=1, **ON)
+    r = chainmodel.simulate(sc, duration=0.05, output_interval=1e-3)
+    found = [w for w in r.warnings if "torsional.wrap_statics = true was not honoured" in w]
+    assert len(found) == 1 and "forced by the test" in found[0]
+    # the fallback is the seat ladder: the static tension the option-less law gives
+    assert r.summary()["static_span_tension_n"] == pytest.approx(
+        ST.static_span_tension(sc.drive, sc.parameters), rel=1e-12)
+    # and with the option honoured there is no such warning
+    monkeypatch.undo()
+    r = chainmodel.simulate(load_scene("xu2010", fidelity=1, **ON), duration=0.05,
+                            output_interval=1e-3)
+    assert not any("torsional.wrap_statics" in w for w in r.warnings)

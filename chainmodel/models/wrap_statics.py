@@ -44,7 +44,7 @@ from ..kinematics.wrapping import tooth_period_geometry
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
-           "SLACK_SHARE", "hangs_on_its_sag", "sag_tension"]
+           "SLACK_SHARE", "hangs_on_its_sag", "sag_tension", "unavailable"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -54,6 +54,8 @@ SLACK_SHARE = 0.25
 ANGLES = 4
 
 _CACHE: dict = {}
+#: why the fit failed, per (drive, parameters) key (:func:`unavailable`)
+_FAILED: dict = {}
 
 
 @dataclass(frozen=True)
@@ -164,9 +166,10 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, sag: bool = True
     if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
         try:
             fit = wrap_fit(drive, params)
+            _FAILED.pop(_key(drive, params), None)
             return fit.compliance, fit.free_length, fit.softness
-        except ValueError:
-            pass
+        except ValueError as exc:    # reported by unavailable() (chainmodel.validity)
+            _FAILED[_key(drive, params)] = str(exc)
     c, f = ST.seat_series_compliance(params, drive)
     if sag and hangs_on_its_sag(drive, params):
         t0 = sag_tension(drive, params)
@@ -175,6 +178,15 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, sag: bool = True
             excess, links = ST.rest_geometry(drive)
             return c, 0.5 * (excess - t0 * (links / k + 2.0 * c)), 0.0
     return c, f, 0.0
+
+
+def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
+    """Why ``torsional.wrap_statics`` could not be honoured for this drive (level 3's statics
+    found no equilibrium when a level 0-2 model asked), or None; the model then held its span
+    ends with the seat ladder. chainmodel.validity turns it into a warning."""
+    if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
+        return None
+    return _FAILED.get(_key(drive, params))
 
 
 def hangs_on_its_sag(drive: Drive, params: Mapping[str, Any]) -> bool:
@@ -291,7 +303,7 @@ def _softness(t0, slack3, c, n_up, n_low, k, dt):
 def _loaded(model, rest, load):
     """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
     span's load step is small next to its distance from the straight layout)."""
-    from .multibody_statics import solve_statics
+    from .multibody_statics import solve_statics, static_state
     try:
         return solve_statics(model, 0.0, load, start=rest.state)
     except ValueError:
