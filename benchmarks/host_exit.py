@@ -25,6 +25,22 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 
+
+def invalid_reports(lines: list[str]) -> list[list[str]]:
+    """valgrind's error reports in its log ``lines``: each "Invalid ..." line with its stack
+    ("at"/"by" lines) up to a blank line, the "==pid==" prefixes stripped."""
+    reports, current = [], None
+    for line in lines:
+        body = re.sub(r"^==\d+== ?", "", line)
+        if body.startswith("Invalid"):
+            current = [body]
+            reports.append(current)
+        elif current is not None and body.strip():
+            current.append(body)
+        else:
+            current = None
+    return reports
+
 def script(fmu: Path) -> str:
     from test_fmu_embedding import HOST_LIFE
     return f"FMU = {str(fmu)!r}\n" + HOST_LIFE
@@ -44,17 +60,7 @@ def main(argv=None) -> int:
             proc = subprocess.run(["valgrind", f"--log-file={log}", sys.executable, "-c", code],
                                   env=env, capture_output=True, text=True)
             lines = log.read_text().splitlines()
-        # an error report: "Invalid ..." then its stack ("at"/"by" lines) up to a blank line
-        reports, current = [], None
-        for line in lines:
-            body = re.sub(r"^==\d+== ?", "", line)
-            if body.startswith("Invalid"):
-                current = [body]
-                reports.append(current)
-            elif current is not None and body.strip():
-                current.append(body)
-            else:
-                current = None
+        reports = invalid_reports(lines)
         wrapper = [r for r in reports   # the launcher, or pythonfmu's binary behind it
                    if any(name in ln for ln in r[:4]
                           for name in ("ChainDrive.so", "ChainDrive.pythonfmu.so", "finalizePython"))]

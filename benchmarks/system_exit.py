@@ -30,6 +30,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from host_exit import invalid_reports   # benchmarks/ is the script's folder
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "examples" / "system"))
@@ -55,16 +57,7 @@ def valgrind(script: str) -> None:
                                sys.executable, "-c", script], env=env, capture_output=True,
                               text=True)
         lines = log.read_text().splitlines()
-    reports, current = [], None
-    for line in lines:
-        body = re.sub(r"^==\d+== ?", "", line)
-        if body.startswith("Invalid"):
-            current = [body]
-            reports.append(current)
-        elif current is not None and body.strip():
-            current.append(body)
-        else:
-            current = None
+    reports = invalid_reports(lines)
     # the dynamic loader's own strncmp reads (is_dst) are valgrind false positives: counted only
     loader = [r for r in reports if any("dl-load.c" in ln for ln in r[1:4])]
     print(f"valgrind: {len(reports)} invalid accesses ({len(loader)} in the dynamic loader's "

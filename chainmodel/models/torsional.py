@@ -139,7 +139,12 @@ class TorsionalModel(Model):
         (option ``torsional.seat_compliance``; :func:`~chainmodel.models.kinematic.
         seat_series_compliance`), or with ``torsional.wrap_statics`` from level 3's statics
         (:func:`~chainmodel.models.wrap_statics.span_ends`)."""
-        return span_ends(self.drive, self.params, sag=self.carries_sag)[:2]
+        return self._span_ends[:2]
+
+    @cached_property
+    def _span_ends(self) -> tuple[float, float, float]:
+        """(compliance, free length, slack-span floor) of the span law, once per model."""
+        return span_ends(self.drive, self.params, sag=self.carries_sag)
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -148,7 +153,7 @@ class TorsionalModel(Model):
         P[S.P_C_LINK] = p["chain.link_damping"]
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
-        P[S.P_SOFT] = span_ends(self.drive, self.params, sag=self.carries_sag)[2]
+        P[S.P_SOFT] = self._span_ends[2]
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]
