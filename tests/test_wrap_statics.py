@@ -7,9 +7,10 @@ docs/reduced_models.md "One wrap and one static tension from level 3's statics")
   level 1 run at rest holds it too;
 * item 3: C1's driven-sprocket mode (ring-down after a sudden start to 5 rpm) at levels 1 and
   2 within 3 % of level 3's and of the two-inertia estimate with the condensed stiffness K_3;
-  xu2010's with the joint dampers off (with them on, level 3's 600 Hz mode is stiffened by
-  them, which no static wrap holds: docs/reduced_models.md); xu2010's loaded split, turned
-  quasi-statically, against level 3's statics.
+  xu2010's is a strict xfail: level 3 rings at its linear mode, 5 % above the static
+  condensation K_3 (tests/test_top_rung_modes.py: its spans' inertia at 600 Hz, which no static
+  wrap holds; docs/reduced_models.md); xu2010's loaded split, turned quasi-statically, against
+  level 3's statics.
 """
 
 from __future__ import annotations
@@ -84,18 +85,26 @@ def _estimate_k3(name, **kw):
                                  / sc.drive.driven.pitch_radius ** 2)
 
 
-@pytest.mark.parametrize("name,kw,level", [
-    ("C1", {}, 1), ("C1", {}, 2),
-    ("xu2010", {"chain_joint_damping": 0.0}, 1),
-    ("xu2010", {"chain_joint_damping": 0.0}, 2)])
-def test_torsional_mode_levels_1_2_on_level3s_wrap(name, kw, level):
-    est = _estimate_k3(name, **ON, **kw)
+_XU_GAP = pytest.mark.xfail(strict=True, reason=(
+    "issue 21 item 3 not met on xu2010 with torsional.wrap_statics: levels 1-2 ring at 560 Hz, "
+    "level 3 at 596 Hz, its linear mode (598 Hz); the static condensation they take (568 Hz "
+    "on level 3's own linearisation) leaves out the spans' inertia, which at 600 Hz does not "
+    "follow the static span shapes (tests/test_top_rung_modes.py). Until 2026-11-24 this case "
+    "ran with the joint dampers off and passed on a spectral peak of several undamped modes "
+    "(569.5 Hz) that was not level 3's mode"))
+
+
+@pytest.mark.parametrize("name,level", [
+    ("C1", 1), ("C1", 2),
+    pytest.param("xu2010", 1, marks=_XU_GAP), pytest.param("xu2010", 2, marks=_XU_GAP)])
+def test_torsional_mode_levels_1_2_on_level3s_wrap(name, level):
+    est = _estimate_k3(name, **ON)
     band = (0.6 * est, 1.4 * est)
-    f3 = ring(name, 3, band, **kw)
-    assert f3 == pytest.approx(est, rel=0.03)
-    f = ring(name, level, band, **ON, **kw)
-    assert f == pytest.approx(f3, rel=0.03)
+    f = ring(name, level, band, **ON)
+    # levels 1-2 are the two-inertia system on K_3 (their own dynamics hold what they are given)
     assert f == pytest.approx(est, rel=0.03)
+    # and that is level 3's mode
+    assert f == pytest.approx(ring(name, 3, band), rel=0.03)
 
 
 @pytest.mark.parametrize("load", [20.0, 43.2])
