@@ -3,10 +3,9 @@
 Issue 4 asks them to agree on the driven sprocket's torsional natural frequency within 5 % and on
 the mean span tensions within 3 %. Both numbers are computed here independently for each level:
 
-* frequency, level 3: the multibody model is relaxed to rest (input shaft held at angle 0, no
-  load, extra damping only while relaxing), its undamped equations are linearised there by
-  central differences, and the mode carrying the largest share of its kinetic energy in the
-  driven sprocket is taken; level 1: the same selection on its own linearised sprocket
+* frequency, level 3: its undamped equations linearised by central differences at its static
+  equilibrium (input shaft held at angle 0, no load; tests/linearised.py), and the mode
+  carrying the largest share of its kinetic energy in the driven sprocket is taken; level 1: the same selection on its own linearised sprocket
   equations (TorsionalModel.sprocket_frequencies, with the mass matrix and bound stiffness).
 * tensions: both levels run the seed 003 section 7 scene (0.05 s ramp to 120 rpm, 43.2 N m) and
   the tensions are averaged over the same steady window.
@@ -25,49 +24,14 @@ import numpy as np
 import pytest
 
 import chainmodel
-from chainmodel.integrate import Verlet
-from chainmodel.models import Inputs
 from chainmodel.scene import load_scene
+from linearised import Linearised
 
 
 def _level3_rest_modes():
-    """(frequencies [Hz], driven-sprocket kinetic-energy share) of level 3 linearised at rest."""
-    sc = load_scene("xu2010", fidelity=3)
-    cls = type(sc.model())
-    relax = dict(sc.parameters)
-    m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
-    relax["chain.link_damping"] = 0.25 * math.sqrt(k * m)
-    relax["driven.damping"] = 0.02
-    relax["chain.joint_damping"] = 0.05     # damps the spans' transverse modes while relaxing
-    u = Inputs(0.0, 0.0, 0.0)
-    st = Verlet(cls(sc.drive, relax), 0.0, None, u)
-    for i in range(1, 301):
-        st.advance(i * 1e-3, u)
-    x0 = st.x.copy()
-    assert np.max(np.abs(x0[x0.size // 2:])) < 1e-3   # settled: every velocity small
-
-    model = cls(sc.drive, dict(sc.parameters, **{"chain.link_damping": 0.0,
-                                                  "contact.damping": 0.0,
-                                                  "input_shaft.damping": 0.0}))
-    nq = x0.size // 2
-    names = model.state_names[:nq]
-    assert names[:2] == ("driver.angle", "driven.angle")
-    mass = np.full(nq, m)
-    mass[0], mass[1] = sc.parameters["driver.inertia"], sc.parameters["driven.inertia"]
-    jac = np.empty((nq, nq))
-    h = 1e-9
-    for j in range(nq):
-        xp, xm = x0.copy(), x0.copy()
-        xp[j] += h
-        xm[j] -= h
-        jac[:, j] = (model.rhs(0.0, xp, u)[nq:] - model.rhs(0.0, xm, u)[nq:]) / (2 * h)
-    lam, vec = np.linalg.eig(-jac)           # q'' = J q  ->  w^2 = eig(-J)
-    keep = lam.real > 1.0
-    w = np.sqrt(lam.real[keep])
-    v = np.real(vec[:, keep])
-    energy = mass[:, None] * v**2
-    share = energy[1] / energy.sum(axis=0)
-    return w / (2 * math.pi), share
+    """(frequencies [Hz], driven-sprocket kinetic-energy share) of level 3 linearised at rest
+    (tests/linearised.py)."""
+    return Linearised("xu2010").modes()
 
 
 def _level1_modes(**overrides):
