@@ -34,6 +34,9 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   the chain stays seated (the tooth-periodic polygon part cancels). A change of more than half
   a driven tooth, pi / z2, means a roller has passed a tooth tip: invalid. Over k periods that
   is a mean speed ratio off z1 / z2 by more than 1 / (2k) relative.
+* **damper losses** (level 3): the power its chain loses (only in its dampers) against the
+  pin-bushing friction the joint dampers stand in for (:mod:`chainmodel.loss_balance`): a
+  warning when the loss exceeds twice that friction by more than 2 % of the input work.
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
   level 3's initial layout is over by then). A warning: a torsional vibration larger than the
@@ -51,6 +54,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from .geometry import Drive
+from .loss_balance import OUTPUTS as LOSS_OUTPUTS
+from .loss_balance import LossBalance
 
 __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load", "seat_clearance_limit",
            "output_problems", "problems", "result_problems", "Monitor", "REVERSAL_SPEED"]
@@ -69,7 +74,7 @@ OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_fo
 @dataclass(frozen=True)
 class Problem:
     """One finding: ``code`` (chain_too_long, chain_too_short, breaking_load, penetration,
-    penetration_roller, teeth_skipped, driven_reversal), the sentence, and whether it makes the
+    penetration_roller, teeth_skipped, driven_reversal, damper_losses, ...), the sentence, and whether it makes the
     result meaningless."""
 
     code: str
@@ -98,6 +103,7 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "penetration_roller": "roller penetration beyond the roller radius",
           "teeth_skipped": "teeth skipped",
           "driven_reversal": "driven sprocket reversing under forward drive",
+          "damper_losses": "level 3's dampers dissipate more than joint friction would",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured"}
 
 
@@ -248,7 +254,7 @@ class Monitor:
                        and all(n in names for n in OUTPUTS) else None)
         self._ix = tuple(self._index[n] for n in OUTPUTS) if self._index else ()
         self._k = 0                 # whole tooth periods of the driver at the last sample
-        self._alarm = (False, False, 0.0)
+        self._alarm = (False, False, 0.0, False)
         # below these no output check can fire: update() then skips problems() (FMU steps)
         bl = breaking_load(drive, self.params)
         self._force_alarm = math.inf if bl is None else bl[0]
@@ -256,20 +262,29 @@ class Monitor:
             self._force_alarm = min(self._force_alarm, self.params["contact.stiffness"]
                                     * seat_clearance_limit(self.params))
         self._half_tooth = math.pi / drive.n_driven
+        self._losses = LossBalance(drive, self.params) if self.level == 3 else None
+        self._loss_ix = (tuple(names.index(n) for n in LOSS_OUTPUTS)
+                         if self._losses is not None and names is not None
+                         and all(n in names for n in LOSS_OUTPUTS) else None)
 
     # -- sample by sample --------------------------------------------------------------------
-    def update(self, t: float, row, input_speed: float) -> list[str]:
-        """Take one sample (``row`` indexed as ``names``) and return the sentences of the
-        problems that appear with it (each problem once per run)."""
+    def update(self, t: float, row, input_speed: float, load_torque: float = 0.0) -> list[str]:
+        """Take one sample (``row`` indexed as ``names``; ``load_torque`` the load input) and
+        return the sentences of the problems that appear with it (each problem once per run)."""
         if self._index is None:
             return []
         a, b, c, d, e, f = self._ix
         self._sample(float(t), float(row[a]), float(row[b]), float(row[c]), float(row[d]),
                      float(row[e]), float(row[f]), float(input_speed))
+        losses = False
+        if self._loss_ix is not None:
+            self._losses.add_one(float(t), *(float(row[i]) for i in self._loss_ix),
+                                 float(load_torque))
+            losses = self._losses.message() is not None
         s = self.stats
         force = max(s.max_contact, s.max_link, -s.min_link)
         alarm = (s.reversed_samples > 0, abs(s.drift) > self._half_tooth,
-                 force if force > self._force_alarm else 0.0)
+                 force if force > self._force_alarm else 0.0, losses)
         if alarm == self._alarm:        # nothing that could raise a new problem has changed
             return []
         self._alarm = alarm
@@ -325,10 +340,14 @@ class Monitor:
                 s.periods, s.last_k, s.last_drift = abs(k), k, drift
 
     # -- whole arrays --------------------------------------------------------------------------
-    def update_arrays(self, time, outputs: Mapping[str, np.ndarray], input_speed) -> None:
-        """Take a whole run (arrays by output name) at once; the same statistics as feeding
+    def update_arrays(self, time, outputs: Mapping[str, np.ndarray], input_speed,
+                      load_torque=0.0) -> None:
+        """Take a whole run (arrays by output name; ``input_speed``, ``load_torque``: the
+        inputs at each sample, or one number) at once; the same statistics as feeding
         :meth:`_sample` every sample, vectorised."""
         t = np.asarray(time, float)
+        if self._losses is not None and all(n in outputs for n in LOSS_OUTPUTS) and len(t):
+            self._losses.add(t, *(outputs[n] for n in LOSS_OUTPUTS), load_torque)
         phi1 = np.asarray(outputs["driver.angle"], float)
         w2 = np.asarray(outputs["driven.speed"], float)
         te = np.asarray(outputs["transmission_error"], float)
@@ -409,6 +428,10 @@ class Monitor:
                     f"({1e3 * allowed:.3g} mm): the penalty contact is far outside its range; "
                     f"use a lower speed or load, more teeth on the small sprocket, a taut chain "
                     f"or a larger chain")))
+        if self._losses is not None:
+            why = self._losses.message()
+            if why is not None:
+                out.append(Problem("damper_losses", why))
         if self.level >= 1:
             half = math.pi / d.n_driven
             if abs(s.drift) > half:
@@ -438,23 +461,25 @@ class Monitor:
 
 
 def output_problems(drive: Drive, params: Mapping[str, Any], level: int, time,
-                    outputs: Mapping[str, np.ndarray], input_speed) -> list[Problem]:
-    """The output checks (breaking load; at level 3 penetration; at levels 1-3 teeth skipped
-    and driven-speed reversal) over a whole run. ``input_speed``: the input-shaft speed at
-    each sample (or one number)."""
+                    outputs: Mapping[str, np.ndarray], input_speed,
+                    load_torque=0.0) -> list[Problem]:
+    """The output checks (breaking load; at level 3 penetration and damper losses; at levels
+    1-3 teeth skipped and driven-speed reversal) over a whole run. ``input_speed``,
+    ``load_torque``: the inputs at each sample (or one number)."""
     if any(n not in outputs for n in OUTPUTS):
         return []
     mon = Monitor(drive, params, level)
-    mon.update_arrays(time, outputs, input_speed)
+    mon.update_arrays(time, outputs, input_speed, load_torque)
     return mon.problems()
 
 
 def problems(drive: Drive, params: Mapping[str, Any], level: int, time=None,
-             outputs: Mapping[str, np.ndarray] | None = None, input_speed=None) -> list[Problem]:
+             outputs: Mapping[str, np.ndarray] | None = None, input_speed=None,
+             load_torque=0.0) -> list[Problem]:
     """Geometry checks, then the output checks if ``outputs`` are given."""
     found = geometry_problems(drive, params)
     if outputs is not None:
-        found += output_problems(drive, params, level, time, outputs, input_speed)
+        found += output_problems(drive, params, level, time, outputs, input_speed, load_torque)
     return found
 
 
@@ -462,6 +487,6 @@ def result_problems(result) -> list[Problem]:
     """:func:`problems` of a ``simulation.Result`` (its scene's drive, parameters, level and
     input speed)."""
     sc = result.scene
-    speed = sc.input_arrays(result.time)[1]
-    outputs = {n: result[n] for n in OUTPUTS if n in result}
-    return problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed)
+    _, speed, _, load = sc.input_arrays(result.time)
+    outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS if n in result}
+    return problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load)

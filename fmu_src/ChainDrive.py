@@ -424,7 +424,7 @@ class ChainDrive(Fmi2Slave):
         self._store_row(row)
         self._stale = False
         self._initialized = True
-        self._check_validity(st.t, row, u.speed,
+        self._check_validity(st.t, row, u.speed, u.torque,
                              self._validity.geometry_problems(st.model.drive, self._model_params))
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
@@ -483,16 +483,16 @@ class ChainDrive(Fmi2Slave):
         self._stale = False
         if session.torque_causal:   # the validity checks' input speed: the motor rotor's
             speed = session.motor_values()[1]
-        self._check_validity(current_time + step_size, values, speed)
+        self._check_validity(current_time + step_size, values, speed, session.torque)
         return True
 
-    def _check_validity(self, t, row, speed, found=()):
+    def _check_validity(self, t, row, speed, load, found=()):
         """Log as fmi2Warning each validity problem (chainmodel.validity) once, when it first
         appears: ``found`` (the geometry's, at initialization), then what the outputs' checks
         find with this sample."""
         texts = [p.text for p in found]
         if self._monitor is not None:
-            texts += self._monitor.update(t, row, speed)
+            texts += self._monitor.update(t, row, speed, load)
         for text in texts:
             self.log(_fmi_text(text), Fmi2Status.warning)
 

@@ -293,3 +293,115 @@ def test_fmu_logs_fmi2warning(chaindrive_fmu):
     simulate_fmu(chaindrive_fmu, load_scene("xu2010", fidelity=1, duration=0.02),
                  log=messages.append)
     assert not [m for m in messages if m.startswith("[WARNING]")]
+
+
+# --- damper losses (level 3): the dampers against the joint friction they stand in for -------
+
+# ISO 606 pin body diameters d2 max [m]; mu of lubricated steel on steel
+D2_10B, D2_08A, MU = 5.08e-3, 3.98e-3, 0.1
+FAN_08A = """name = "08A at 1500 rpm"
+chain = "08A"
+duration = 0.3
+output_interval = 1e-4
+[operating]
+input_speed_rpm = 1500.0
+ramp_time = 0.05
+load_torque = 10.0
+static_tension = 278.0
+[parameters]
+"drive.driver_teeth" = 17
+"drive.driven_teeth" = 51
+"drive.pitch" = 0.0127
+"drive.links" = 116
+"drive.centre_distance" = 0.0
+"""
+
+
+def _balance_signals(extra, tight=1100.0, slack=100.0, w1=12.0, load=40.0, revs=3):
+    """xu2010's sprockets turning steadily at w1 [rad/s] for ``revs`` driver revolutions, the
+    load torque ``load`` on the driven shaft and a shaft torque that delivers it plus the share
+    ``extra`` of the load's power lost in the chain."""
+    z1, z2 = 25, 17
+    t = np.linspace(0.0, revs * 2 * math.pi / w1, 3001)
+    w2 = w1 * z1 / z2
+    out = {"driver.angle": w1 * t, "driver.speed": np.full_like(t, w1),
+           "driven.speed": np.full_like(t, w2), "transmission_error": np.zeros_like(t),
+           "input_shaft.torque": np.full_like(t, load * z1 / z2 * (1 + extra)),
+           "tight_span.tension": np.full_like(t, tight), "slack_span.tension": np.full_like(t, slack),
+           "contact.max_force": np.full_like(t, 100.0), "chain.max_link_tension": np.full_like(t, tight),
+           "chain.min_link_tension": np.full_like(t, slack)}
+    return t, out
+
+
+def test_damper_losses_against_joint_friction_on_signals():
+    """The check fires when the loss is above twice the joint friction (written here from ISO
+    606's d2 and mu) by more than 2 % of the input work, and only at level 3."""
+    sc = load_scene("xu2010", fidelity=3, driven_damping=0.0)
+    z1, z2, load, w1, tight, slack = 25, 17, 40.0, 12.0, 1100.0, 100.0
+    p_in = load * z1 / z2 * w1
+    friction = MU * D2_10B / 2 * z1 * (1 / z1 + 1 / z2) * w1 * (tight + slack) / p_in
+    assert 0.01 < friction < 0.05
+
+    def check(extra, level=3):
+        t, out = _balance_signals(extra)
+        return codes(output_problems(sc.drive, sc.parameters, level, t, out, w1, load))
+
+    def share(x):           # the loss as a share of the input work
+        return x / (1 + x)
+
+    def extra(ratio):       # the lost share of the load's power that makes loss = ratio x friction
+        return ratio * friction / (1 - ratio * friction)
+
+    assert share(extra(3.0)) - friction > 0.02              # 3x, excess above 2 %: fires
+    assert check(extra(3.0)) == {"damper_losses"}
+    assert check(extra(3.0), level=1) == set()
+    assert share(extra(2.5)) - friction < 0.02              # 2.5x but excess below 2 %: quiet
+    assert check(extra(2.5)) == set()
+    assert check(extra(1.8)) == set()
+    assert check(0.0) == set()
+    # a tension five times as high: the friction too, and 3x the old loss is within it
+    t, out = _balance_signals(extra(3.0), tight=5 * tight, slack=5 * slack)
+    assert codes(output_problems(sc.drive, sc.parameters, 3, t, out, w1, load)) == set()
+
+
+def test_08a_at_1500_rpm_warns_and_the_joint_dampers_are_the_cause(tmp_path):
+    """An 08A 17/51 drive at 1500 rpm and 10 N m (chainmodel new-scene's defaults): level 3's
+    dampers take several times the joint friction; with chain.joint_damping = 0 they do not."""
+    path = tmp_path / "fan08a.toml"
+    path.write_text(FAN_08A)
+    r = chainmodel.simulate(path, fidelity=3)
+    assert "damper_losses" in codes(r.problems)
+    assert any("chain.joint_damping" in w for w in r.warnings)
+    assert "damper_losses" not in codes(chainmodel.simulate(path, fidelity=3,
+                                                            chain_joint_damping=0.0).problems)
+
+
+def test_damper_losses_sample_by_sample_equals_whole_arrays(tmp_path):
+    """The FMU's path (Monitor.update with the load input) finds the losses the arrays give."""
+    path = tmp_path / "fan08a.toml"
+    path.write_text(FAN_08A)
+    r = chainmodel.simulate(path, fidelity=3)
+    sc = r.scene
+    _, speed, _, load = sc.input_arrays(r.time)
+    mon = Monitor(sc.drive, sc.parameters, 3, NAMES)
+    rows = np.column_stack([r[n] for n in NAMES])
+    texts = []
+    for i in range(len(r.time)):
+        texts += mon.update(r.time[i], rows[i], speed[i], load[i])
+    arrays = Monitor(sc.drive, sc.parameters, 3)
+    arrays.update_arrays(r.time, {n: r[n] for n in NAMES}, speed, load)
+    assert mon._losses.shares() == pytest.approx(arrays._losses.shares(), rel=1e-9)
+    assert sum("dampers take" in t for t in texts) == 1
+
+
+@pytest.mark.fmu
+def test_fmu_logs_the_damper_losses(chaindrive_fmu, tmp_path):
+    """The FMU's monitor gets the load input: the 08A drive at level 3 logs the losses once."""
+    from chainmodel.fmu import simulate_fmu
+    path = tmp_path / "fan08a.toml"
+    path.write_text(FAN_08A)
+    messages = []
+    simulate_fmu(chaindrive_fmu, load_scene(path, fidelity=3, duration=0.2,
+                                            output_interval=5e-4), log=messages.append)
+    warned = [m for m in messages if m.startswith("[WARNING]") and "dampers take" in m]
+    assert len(warned) == 1 and "chain.joint_damping" in warned[0]

@@ -1,0 +1,173 @@
+"""The power level 3 loses inside the chain, against the joint friction it stands in for (a
+validity check: chainmodel.validity, code ``damper_losses``; docs/multibody.md "Convergence and
+default damping", item 5).
+
+Level 3's chain has no friction; it loses power only in its dampers (links, roller-seat contacts
+and the joint dampers ``chain.joint_damping``, a viscous stand-in for pin-bushing friction sized
+on xu2010's 10B at 120 rpm). A viscous damper matches Coulomb friction at one articulation rate:
+its loss grows with the speed squared, the friction's with the speed. Over a window that starts
+once the driver has turned one revolution:
+
+* the loss: the work the input shaft does on the driver, int T_shaft w1 dt, less the work into
+  the load and the driven damping, int (M + d2 w2) w2 dt, less the change of the kinetic energy
+  of the sprockets and the chain moving at the driver's pitch speed;
+* the joint friction of the same drive: every link articulates through 2 pi / z entering and
+  leaving each sprocket under the tension of the span it joins, against mu T r_pin, at
+  z1 w1 / 2 pi links per second: P_f = mu r_pin z1 (1/z1 + 1/z2) w1 (T_tight + T_slack),
+  mu = ``FRICTION`` (lubricated steel on steel, the value the joint damping is sized with),
+  r_pin = d2 / 2 of the ISO 606 chain of this pitch and roller (chainmodel.chains).
+
+The result depends on damping no source gives when the loss exceeds ``RATIO`` times that
+friction and the excess is more than ``EXCESS`` of the input work (the input torque is then
+high by that much).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from .geometry import Drive
+
+__all__ = ["FRICTION", "RATIO", "EXCESS", "OUTPUTS", "pin_radius", "LossBalance"]
+
+#: pin-bushing friction coefficient (lubricated steel on steel; docs/multibody.md)
+FRICTION = 0.1
+#: the dampers' loss against the joint friction above which the check fires
+RATIO = 2.0
+#: ... when the excess over that friction is also above this share of the input work
+EXCESS = 0.02
+#: the outputs the balance needs (besides the input speed and load torque)
+OUTPUTS = ("driver.angle", "driver.speed", "driven.speed", "input_shaft.torque",
+           "tight_span.tension", "slack_span.tension")
+
+_PITCH_MATCH = 1e-3
+_ROLLER_MATCH = 1e-5
+
+
+def pin_radius(drive: Drive, params: Mapping[str, Any]) -> tuple[float, str] | None:
+    """(d2 / 2 [m], chain name) of the ISO 606 chain of this pitch (and roller diameter, of two
+    the one with the larger pin), or None for a pitch chainmodel.chains does not list."""
+    from .chains import DIMENSIONS, chains_of_pitch
+    names = [n for n in chains_of_pitch(drive.pitch) if n in DIMENSIONS]
+    if not names:
+        return None
+    from .presets import ISO606
+    d1 = 2.0 * float(params.get("chain.roller_radius", 0.0))
+    same = [n for n in names if abs(ISO606[n].roller_diameter - d1) <= _ROLLER_MATCH]
+    name = max(same or names, key=lambda n: DIMENSIONS[n].pin_diameter)
+    return 0.5 * DIMENSIONS[name].pin_diameter, name
+
+
+class LossBalance:
+    """The sums of the module docstring, fed with arrays of consecutive samples (several calls
+    continue one another: the last sample is carried over)."""
+
+    def __init__(self, drive: Drive, params: Mapping[str, Any]):
+        self.drive = drive
+        p = params
+        self.j1, self.j2 = float(p["driver.inertia"]), float(p["driven.inertia"])
+        self.d2 = float(p["driven.damping"])
+        self.chain_mass = (drive.links or 0) * float(p["chain.link_mass"])
+        self.r1 = drive.driver.pitch_radius
+        pin = pin_radius(drive, p)
+        self.pin = pin
+        z1, z2 = drive.n_driver, drive.n_driven
+        self.friction_factor = (math.nan if pin is None
+                                else FRICTION * pin[0] * z1 * (1.0 / z1 + 1.0 / z2))
+        self.start_angle = None      # the driver's angle at the first sample
+        self.window_angle = None     # ... at the window's first sample
+        self.energy0 = 0.0
+        self.energy1 = 0.0
+        self.work_in = self.work_out = self.friction = 0.0
+        self.last = None             # the last sample (t, phi1, p_in, p_out, p_f, energy)
+
+    def _energy(self, w1, w2):
+        return 0.5 * (self.j1 * w1 * w1 + self.j2 * w2 * w2
+                      + self.chain_mass * (self.r1 * w1) ** 2)
+
+    def add_one(self, t, phi1, w1, w2, shaft, tight, slack, load) -> None:
+        """Take one sample (numbers): :meth:`add`'s sums in plain floats, for the FMU's
+        communication points."""
+        if self.start_angle is None:
+            self.start_angle = phi1
+        p_in, p_out, p_f = shaft * w1, (load + self.d2 * w2) * w2, w1 * (tight + slack)
+        energy = self._energy(w1, w2)
+        last = self.last
+        self.last = (t, phi1, p_in, p_out, p_f, energy)
+        if abs(phi1 - self.start_angle) < 2.0 * math.pi:
+            return
+        if self.window_angle is None or last is None:
+            if self.window_angle is None:
+                self.window_angle, self.energy0 = phi1, energy
+        else:
+            h = 0.5 * (t - last[0])
+            self.work_in += h * (p_in + last[2])
+            self.work_out += h * (p_out + last[3])
+            self.friction += h * (p_f + last[4])
+        self.energy1 = energy
+
+    def add(self, t, phi1, w1, w2, shaft, tight, slack, load) -> None:
+        """Take samples (arrays; ``load`` may be one number), the same sums as :meth:`add_one`
+        on each in turn, vectorised."""
+        t, phi1, w1, w2, shaft, tight, slack, load = np.broadcast_arrays(
+            *(np.atleast_1d(np.asarray(a, float)) for a in
+              (t, phi1, w1, w2, shaft, tight, slack, load)))
+        if not t.size:
+            return
+        if self.start_angle is None:
+            self.start_angle = float(phi1[0])
+        p_in = shaft * w1
+        p_out = (load + self.d2 * w2) * w2
+        p_f = w1 * (tight + slack)
+        energy = self._energy(w1, w2)
+        inside = np.abs(phi1 - self.start_angle) >= 2.0 * math.pi
+        if self.last is not None:
+            lt, lphi, lpin, lpout, lpf, le = self.last
+            t = np.r_[lt, t]
+            p_in, p_out, p_f = np.r_[lpin, p_in], np.r_[lpout, p_out], np.r_[lpf, p_f]
+            energy, phi1 = np.r_[le, energy], np.r_[lphi, phi1]
+            inside = np.r_[abs(lphi - self.start_angle) >= 2.0 * math.pi, inside]
+        self.last = (float(t[-1]), float(phi1[-1]), float(p_in[-1]), float(p_out[-1]),
+                     float(p_f[-1]), float(energy[-1]))
+        if not inside.any():
+            return
+        k = int(np.argmax(inside))
+        if self.window_angle is None:
+            self.window_angle, self.energy0 = float(phi1[k]), float(energy[k])
+        tt = t[k:]
+        if tt.size > 1:
+            self.work_in += float(np.trapezoid(p_in[k:], tt))
+            self.work_out += float(np.trapezoid(p_out[k:], tt))
+            self.friction += float(np.trapezoid(p_f[k:], tt))
+        self.energy1 = float(energy[-1])
+
+    def shares(self) -> tuple[float, float] | None:
+        """(loss, joint friction) as shares of the input work over the window, or None before
+        the window holds one revolution of the driver, without input work, or without an ISO
+        606 chain to size the friction."""
+        if (self.window_angle is None or self.last is None or self.pin is None
+                or abs(self.last[1] - self.window_angle) < 2.0 * math.pi or not self.work_in > 0):
+            return None
+        loss = self.work_in - self.work_out - (self.energy1 - self.energy0)
+        return loss / self.work_in, self.friction_factor * self.friction / self.work_in
+
+    def message(self) -> str | None:
+        """The warning's sentence when the dampers' loss exceeds the joint friction (module
+        docstring), else None."""
+        s = self.shares()
+        if s is None:
+            return None
+        loss, friction = s
+        if not (loss > RATIO * friction and loss - friction > EXCESS):
+            return None
+        return (f"level 3's dampers take {100 * loss:.3g} % of the input work, {loss / friction:.3g}x "
+                f"the pin-bushing friction of this drive ({100 * friction:.3g} %: mu = {FRICTION:g}, "
+                f"ISO 606 {self.pin[1]} pin radius {1e3 * self.pin[0]:.3g} mm, the run's span "
+                f"tensions): the viscous joint dampers (chain.joint_damping, sized for a 10B chain "
+                f"at 120 rpm) grow with the speed squared, friction with the speed, so the input "
+                f"torque and the span tensions carry damping no source gives; lower "
+                f"chain.joint_damping, or read the result with the trade study's damping band "
+                f"(docs/multibody.md)")
