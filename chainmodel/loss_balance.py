@@ -43,21 +43,18 @@ EXCESS = 0.02
 OUTPUTS = ("driver.angle", "driver.speed", "driven.speed", "input_shaft.torque",
            "tight_span.tension", "slack_span.tension")
 
-_PITCH_MATCH = 1e-3
-_ROLLER_MATCH = 1e-5
-
 
 def pin_radius(drive: Drive, params: Mapping[str, Any]) -> tuple[float, str] | None:
-    """(d2 / 2 [m], chain name) of the ISO 606 chain of this pitch (and roller diameter, of two
-    the one with the larger pin), or None for a pitch chainmodel.chains does not list."""
-    from .chains import DIMENSIONS, chains_of_pitch
-    names = [n for n in chains_of_pitch(drive.pitch) if n in DIMENSIONS]
+    """(d2 / 2 [m], chain name) of the ISO 606 chain of this pitch and roller diameter
+    (:func:`~chainmodel.presets.iso606_matches`, as the breaking load's; of two, the one with
+    the larger pin), or None for a pitch chainmodel.chains does not list."""
+    from .chains import DIMENSIONS
+    from .presets import iso606_matches
+    sizes, _ = iso606_matches(drive.pitch, 2.0 * float(params.get("chain.roller_radius", 0.0)))
+    names = [c.name for c in sizes if c.name in DIMENSIONS]
     if not names:
         return None
-    from .presets import ISO606
-    d1 = 2.0 * float(params.get("chain.roller_radius", 0.0))
-    same = [n for n in names if abs(ISO606[n].roller_diameter - d1) <= _ROLLER_MATCH]
-    name = max(same or names, key=lambda n: DIMENSIONS[n].pin_diameter)
+    name = max(names, key=lambda n: DIMENSIONS[n].pin_diameter)
     return 0.5 * DIMENSIONS[name].pin_diameter, name
 
 

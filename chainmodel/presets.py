@@ -19,7 +19,7 @@ from importlib import resources
 from .geometry import Drive
 
 __all__ = ["preset", "preset_names", "reference_table", "reference_values", "ISO606",
-           "ChainSize", "iso606"]
+           "ChainSize", "iso606", "iso606_matches"]
 
 INCH = 0.0254
 
@@ -147,6 +147,15 @@ ISO606 = {c.name: c for c in (
     ChainSize("12B", 19.05e-3, 12.07e-3, 28.9e3),
     ChainSize("16B", 25.40e-3, 15.88e-3, 60.0e3),
 )}
+
+
+def iso606_matches(pitch: float, roller_diameter: float) -> tuple[list[ChainSize], bool]:
+    """The ISO 606 chains of this pitch [m] (to 0.1 %) and, of those, the ones whose roller
+    diameter [m] matches to 10 um if any does (else all of the pitch); and whether the roller
+    matched. ([], False) for a pitch ISO 606 does not list here."""
+    sizes = [c for c in ISO606.values() if abs(c.pitch - pitch) <= 1e-3 * c.pitch]
+    same = [c for c in sizes if abs(c.roller_diameter - roller_diameter) <= 1e-5]
+    return (same, True) if same else (sizes, False)
 
 
 def iso606(name: str) -> ChainSize:

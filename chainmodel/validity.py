@@ -62,10 +62,6 @@ __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load", "seat_
 
 #: a driven speed against the input's direction by more than this [rad/s] is a reversal
 REVERSAL_SPEED = 1e-3
-#: pitches [m] match an ISO 606 chain's within this relative difference
-_PITCH_MATCH = 1e-3
-#: roller diameters [m] match within this
-_ROLLER_MATCH = 1e-5
 
 OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_force",
            "chain.max_link_tension", "chain.min_link_tension")
@@ -191,13 +187,11 @@ def breaking_load(drive: Drive, params: Mapping[str, Any]) -> tuple[float, str] 
     given = params.get("chain.breaking_load")
     if given is not None and float(given) > 0:
         return float(given), f"chain.breaking_load = {float(given) / 1e3:.4g} kN"
-    from .presets import ISO606
-    sizes = [c for c in ISO606.values() if abs(c.pitch - drive.pitch) <= _PITCH_MATCH * c.pitch]
+    from .presets import iso606_matches
+    sizes, same_roller = iso606_matches(drive.pitch,
+                                        2.0 * float(params.get("chain.roller_radius", 0.0)))
     if not sizes:
         return None
-    d1 = 2.0 * float(params.get("chain.roller_radius", 0.0))
-    same_roller = [c for c in sizes if abs(c.roller_diameter - d1) <= _ROLLER_MATCH]
-    sizes = same_roller or sizes
     chain = min(sizes, key=lambda c: c.tensile_strength)
     names = "/".join(c.name for c in sizes)
     which = (f"ISO 606 {chain.name}" if len(sizes) == 1 else
