@@ -95,7 +95,8 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
         f"input_speed_rpm = {speed_rpm!r}      # steady input-shaft speed [rpm]",
         f"ramp_time = 0.05             # s, linear ramp from rest",
         f"load_torque = {load_torque!r}         # N.m on the driven shaft",
-        f"static_tension = {static_tension!r}      # N at rest: sets chain.pretension",
+        (f"static_tension = {static_tension!r}      # N at rest: sets chain.pretension"
+         if static_tension else "# no static_tension: chain.pretension = 0 below"),
         "",
         "[parameters]                  # any name of docs/parameters.md; given values win",
         f"\"drive.driver_teeth\" = {driver_teeth}",
@@ -103,6 +104,8 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
         f"\"drive.pitch\" = {p!r}        # m, ISO 606 {c.name}",
         f"\"drive.links\" = {links}",
         a_line,
+        *(["\"chain.pretension\" = 0.0     # no pretension: the chain carries the tension its "
+           "own weight gives (its sag)"] if not static_tension else []),
         "# the chain's values, for reference (uncomment one to replace it):",
         *[f"# \"{k}\" = {v:.6g}" for k, v in values.items() if k != "drive.pitch"],
         "# values no chain gives keep their defaults (sprocket inertias, shaft, damping):",
@@ -137,7 +140,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--centre-distance", type=float, metavar="MM",
                    help="shaft centre distance [mm] (default: where the links wrap tightly)")
     p.add_argument("--static-tension", type=float, metavar="N",
-                   help="static span tension at rest [N] (default 2 %% of the breaking load)")
+                   help="static span tension at rest [N] (default 2 %% of the breaking load; "
+                        "0: no pretension, the chain carries what its own weight gives)")
     p.add_argument("--name", default="my drive", help="scene name")
     p.add_argument("--fidelity", default="torsional", help="0-3 or kinematic ... multibody")
     p.add_argument("-o", "--out", metavar="FILE.toml",

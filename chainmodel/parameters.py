@@ -210,7 +210,8 @@ PARAMETERS: tuple[Parameter, ...] = (
        "18's system example; give your motor's)", minimum=0.0, exclusive_minimum=True,
        levels=(1, 2, 3)),
     # environment
-    _p("gravity", 9.81, "m/s2", "gravitational acceleration (acts on the chain)", minimum=0.0,
+    _p("gravity", 9.81, "m/s2", "gravitational acceleration (acts on the chain: its sag "
+       "tension at rest at every level, its spans' sag at levels 2-3)", minimum=0.0,
        levels=(0, 1, 2, 3)),
     # levels 1-2
     _p("torsional.chain_inertia", True, "",
@@ -230,8 +231,9 @@ PARAMETERS: tuple[Parameter, ...] = (
        "clearance and flanks, gravity), condensed onto the driven sprocket: the static tension "
        "is level 3's, the driven sprocket's stiffness its condensed one and the loaded split at "
        "rest follows level 3's (docs/reduced_models.md, \"One wrap\"); off, "
-       "torsional.seat_compliance decides, except that levels 0-1 give a chain with no "
-       "pretension that hangs on its sag level 3's static tension", kind=bool, levels=(0, 1, 2)),
+       "torsional.seat_compliance decides and the spans' weight adds the elastic catenary's "
+       "sag tension (docs/reduced_models.md, \"One static tension\")", kind=bool,
+       levels=(0, 1, 2)),
     _p("torsional.mean_link_compliance", True, "",
        "at levels 1-2 take each span's compliance (n / link_stiffness) and damping from its "
        "tooth-period-mean link count n, while its stretch follows the current count: the tension "

@@ -186,17 +186,36 @@ class _Slack(Exception):
     """A probe pretension left the chain slack (static tension 0)."""
 
 
-def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float) -> float:
+def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float, *,
+                       exact: bool = True) -> float:
     """Model.static_tension() of ``level`` with ``chain.pretension = pretension``; 0 where the
-    pretension leaves the chain slack (which the models refuse to build)."""
+    pretension leaves the chain slack (which the models refuse to build). ``exact=False`` at
+    levels 0-2: the elastic catenary's parabola alone, without level 3's statics
+    (wrap_statics.weighted_static_tension)."""
     from .models.kinematic import pretension_error
     from .models.wrap_statics import static_span_tension
     trial = dict(params, **{"chain.pretension": pretension})
     if pretension > 0 and pretension_error(drive, trial) is not None:
         return 0.0
-    if level <= 2:   # the levels 0-2 share it (level 2 refuses to build at zero tension)
-        return static_span_tension(drive, trial, sag=False)
+    if level <= 2:   # the levels 0-2 share it
+        return static_span_tension(drive, trial, exact=exact)
     return float(model_class(level)(drive, trial).static_tension())
+
+
+#: a target this many times the parabola's tension at pretension 0 is above the exact one too
+#: (level 3's sag term moves it by (S_3 / S)^(1/3), measured 0.95-1.01: docs/reduced_models.md)
+_CLEARLY_ABOVE = 1.5
+
+
+def _tension_without_pretension(level: int, drive: Drive, params: dict, target: float) -> float:
+    """The static tension at pretension 0, as far as comparing ``target`` with it needs: at
+    levels 0-2 the parabola's where the target is clearly above it (no level 3 statics for a
+    pretensioned scene), else the level's own."""
+    if level <= 2:
+        cheap = _static_tension_at(level, drive, params, 0.0, exact=False)
+        if target >= _CLEARLY_ABOVE * cheap:
+            return cheap
+    return _static_tension_at(level, drive, params, 0.0)
 
 
 @lru_cache(maxsize=128)
@@ -210,7 +229,7 @@ def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) ->
     chain.pretension."""
     from .models.kinematic import loose_chain_error
     params = dict(frozen)
-    t0 = _static_tension_at(level, drive, params, 0.0)
+    t0 = _tension_without_pretension(level, drive, params, target)
     loose = loose_chain_error(drive, params) if target > t0 else None
     if loose is not None:
         raise ValueError(f"static_tension {target:g} N is refused: {loose}")
@@ -219,8 +238,13 @@ def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) ->
         raise ValueError(f"static_tension cannot be set at fidelity {level}: the level reports "
                          "no static tension")
     if target < t0 - tol:
+        weight = ""
+        if params["gravity"] != 0.0:
+            weight = (" with no pretension (the spans' weight included: a chain under gravity "
+                      "carries at least its sag tension; chain.pretension = 0 instead of a "
+                      "static_tension asks for exactly that)")
         raise ValueError(f"static_tension {target:g} N is below the {t0:.4g} N the centre "
-                         f"distance already gives at fidelity {level}; shorten "
+                         f"distance already gives at fidelity {level}{weight}; shorten "
                          "drive.centre_distance (or use more links)")
     if abs(target - t0) <= tol:
         return 0.0
@@ -412,7 +436,8 @@ class Scene:
         if spec.get("static_tension") is not None and not explicit:
             target = spec["static_tension"]
             params = dict(scene.parameters, **{"chain.pretension": 0.0})
-            geometric = _static_tension_at(scene.fidelity, scene.drive_for(params), params, 0.0)
+            geometric = _tension_without_pretension(scene.fidelity, scene.drive_for(params),
+                                                    params, target)
             if target >= geometric:
                 scene = scene.with_overrides(static_tension=target)
             else:

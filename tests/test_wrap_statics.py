@@ -2,7 +2,7 @@
 docs/reduced_models.md "One wrap and one static tension from level 3's statics").
 
 * item 4: the 08B fan drive with no pretension near and away from its tight wrap (its spans
-  sag): levels 0, 1 and 2 report the static tension level 3's dynamic model holds at rest when
+  sag; tests/test_span_sag.py for the pretension taking it up): levels 0, 1 and 2 report the static tension level 3's dynamic model holds at rest when
   started from the static equilibrium (0.1 s at rest, its own force law deciding), within 5 %;
   level 1 run at rest holds it too;
 * item 3: C1's driven-sprocket mode (ring-down after a sudden start to 5 rpm) at levels 1 and
@@ -54,13 +54,16 @@ def _level3_at_rest(dc):
 @pytest.mark.parametrize("dc", [0.0, -0.5e-3, -2e-3, -5e-3])
 def test_fan_without_pretension_static_tension_agrees_at_every_level(dc, options):
     """By default too: a chain with no pretension that the seat ladder leaves slack hangs on
-    its sag, and levels 0-1 take that tension from level 3's statics (hangs_on_its_sag); level
-    2's string modes need a taut span, so by default it refuses such a chain and says why."""
+    its sag, and levels 0-2 carry that tension (wrap_statics.weighted_static_tension: the
+    elastic catenary, its sag term from level 3's statics where the weight carries the
+    tension); level 2 refuses a chain longer than its wrap (dc < 0) unless the option holds
+    its ends, and says so."""
     t3 = _level3_at_rest(dc)
     assert t3 > 1.0                     # the sag tension, not a slack 0
     for level in (0, 1, 2):
-        if level == 2 and not options:
-            with pytest.raises(ValueError, match="chain.pretension|both spans in tension"):
+        if level == 2 and dc < 0 and not options:
+            # longer than its wrap: level 2's strings refuse it unless the option holds it
+            with pytest.raises(ValueError, match="torsional.wrap_statics"):
                 _fan_scene(dc, level).model()
             continue
         t = _fan_scene(dc, level, **options).model().static_tension()
@@ -146,9 +149,9 @@ def test_an_option_that_could_not_be_honoured_is_reported(monkeypatch):
     r = chainmodel.simulate(sc, duration=0.05, output_interval=1e-3)
     found = [w for w in r.warnings if "torsional.wrap_statics = true was not honoured" in w]
     assert len(found) == 1 and "forced by the test" in found[0]
-    # the fallback is the seat ladder: the static tension the option-less law gives
+    # the fallback is the option-less law: the seat ladder with its weight
     assert r.summary()["static_span_tension_n"] == pytest.approx(
-        ST.static_span_tension(sc.drive, sc.parameters), rel=1e-12)
+        W.weighted_static_tension(sc.drive, sc.parameters), rel=1e-12)
     # and with the option honoured there is no such warning
     monkeypatch.undo()
     r = chainmodel.simulate(load_scene("xu2010", fidelity=1, **ON), duration=0.05,

@@ -40,6 +40,7 @@ import numpy as np
 from ..geometry import Drive
 from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
+from .span_sag import sag_term
 from .torsional import TorsionalModel
 
 __all__ = ["ModalModel", "galerkin_coefficients"]
@@ -63,9 +64,6 @@ class ModalModel(TorsionalModel):
     name: ClassVar[str] = "modal"
     preferred_method: ClassVar[str] = "rk4"
     second_order: ClassVar[bool] = False
-    #: the string modes need a taut span: a chain that hangs on its sag is refused here, not
-    #: given level 3's sag tension (its spans are not strings; docs/reduced_models.md)
-    carries_sag: ClassVar[bool] = False
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
         from ..parameters import BY_NAME
@@ -75,19 +73,29 @@ class ModalModel(TorsionalModel):
         self.n_modes = int(params["modal.modes"])
         super().__init__(drive, params)
         t0 = self.static_tension()
-        if not t0 > 0.0:
-            from .kinematic import loose_chain_error
-            loose = loose_chain_error(drive, self.params)
+        from .kinematic import loose_chain_error
+        loose = loose_chain_error(drive, self.params)
+        # a chain longer than its wrap: refused unless level 3's statics hold its ends (its
+        # slack span hangs in a sag that turns deep under load, past the strings' validity)
+        if not t0 > 0.0 or (loose is not None and not self.params["torsional.wrap_statics"]):
             if loose is not None:
                 raise ValueError(f"the modal model (level 2) needs both spans in tension at rest "
-                                 f"(a string without tension has no transverse stiffness), "
-                                 f"but {loose}")
+                                 f"(its spans are taut strings, not a chain hanging in a sag; "
+                                 f"torsional.wrap_statics = true holds one on level 3's "
+                                 f"statics), but {loose}")
             raise ValueError(
                 f"the modal model (level 2) needs both spans in tension at rest, but the static "
                 f"span tension is {t0:g} N (a string without tension has no transverse "
                 f"stiffness): raise chain.pretension (now {self.params['chain.pretension']:g} N) "
                 f"or shorten drive.centre_distance")
         self._fill_modal_parameters(t0)
+
+    def sag_stretch(self) -> float:
+        """The string modes' sag under gravity stretches the spans by S_N / T^2 at rest (S_N
+        the modal sum of the elastic catenary's sag term, :func:`~chainmodel.models.span_sag.
+        sag_term`): the span law's ends give it away again, so the static tension is held once
+        (wrap_statics.span_ends)."""
+        return sag_term(self.drive, self.params, modes=self.n_modes)
 
     def _fill_modal_parameters(self, t0: float) -> None:
         p, d, r, P = self.params, self.drive, self.reference, self.P

@@ -67,9 +67,6 @@ class TorsionalModel(Model):
     name: ClassVar[str] = "torsional"
     preferred_method: ClassVar[str] = "rk4"
     second_order: ClassVar[bool] = True
-    #: a chain with no pretension that hangs on its sag carries level 3's static tension here
-    #: (chainmodel.models.wrap_statics.hangs_on_its_sag; issue 21 item 4)
-    carries_sag: ClassVar[bool] = True
     n_modes: int = 0
     #: names of switching_functions' entries (for messages)
     switching_names: ClassVar[tuple[str, ...]] = SWITCH_NAMES
@@ -144,7 +141,12 @@ class TorsionalModel(Model):
     @cached_property
     def _span_ends(self) -> tuple[float, float, float]:
         """(compliance, free length, slack-span floor) of the span law, once per model."""
-        return span_ends(self.drive, self.params, sag=self.carries_sag)
+        return span_ends(self.drive, self.params, stretch=self.sag_stretch())
+
+    def sag_stretch(self) -> float:
+        """The sag term [N^2 m] this level's span law adds at rest by itself: none here (the
+        spans are straight; span_sag); level 2's string modes hold one."""
+        return 0.0
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -310,7 +312,7 @@ class TorsionalModel(Model):
         cached = self.__dict__.get("_static_tension_value")
         if cached is None:
             cached = self.__dict__["_static_tension_value"] = static_span_tension(
-                self.drive, self.params, sag=self.carries_sag)
+                self.drive, self.params)
         return cached
 
     def axial_frequency(self) -> float:

@@ -1,5 +1,7 @@
-"""Levels 0-2's span ends from level 3's statics (issue 21 items 3-4; docs/reduced_models.md,
-"One wrap and one static tension from level 3's statics").
+"""Levels 0-2's static tension and span ends: the spans' weight (the elastic catenary,
+:mod:`.span_sag`; issue 21 item 4, docs/reduced_models.md "One static tension, gravity
+included") and, with ``torsional.wrap_statics``, level 3's statics (items 3-4, "One wrap and one
+static tension from level 3's statics").
 
 Levels 1-2 hold each span between its sprockets with the law T_raw = (l - n p_free - f) /
 (n / k + c) (spans.py ``_tension``): n links of stiffness k in series with an end compliance c,
@@ -41,10 +43,11 @@ import numpy as np
 from .. import parameters as PRM
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
+from . import span_sag as SG
 from . import static_tension as ST
 
-__all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "softplus", "LOAD_STEP",
-           "SLACK_SHARE", "hangs_on_its_sag", "sag_tension", "unavailable"]
+__all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
+           "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -52,6 +55,13 @@ LOAD_STEP = 0.2
 SLACK_SHARE = 0.25
 #: driver positions over a tooth period at which the loaded split is solved (their mean)
 ANGLES = 4
+#: the weight's share of the static tension from which (MU_LOW) and to which (MU_HIGH) level
+#: 3's statics replace the parabola's sag term (:func:`weighted_static_tension`)
+MU_LOW, MU_HIGH = 0.25, 0.75
+#: level 3's sag term is taken only within this factor of the parabola's (measured S_3 / S on
+#: the unseen 08A, 08B, 10A, 12A drives: 0.86-1.03); beyond it level 3's static tension is not
+#: the weight's doing
+SAG_RATIO = 2.0
 
 _CACHE: dict = {}
 #: why the fit failed, per (drive, parameters) key (:func:`unavailable`)
@@ -155,29 +165,105 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     return fit
 
 
-def span_ends(drive: Drive, params: Mapping[str, Any], *, sag: bool = True
+def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0
               ) -> tuple[float, float, float]:
     """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
-    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count); for a
-    chain that hangs on its sag (:func:`hangs_on_its_sag`, unless ``sag=False``) the seat
-    ladder's compliance with the free length that gives level 3's static tension
-    (:func:`sag_tension`); else - or where level 3 has no static equilibrium - the seat ladder
-    (:func:`~chainmodel.models.static_tension.seat_series_compliance`) and no floor."""
+    :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count); else - or
+    where level 3 has no static equilibrium - the seat ladder's compliance
+    (:func:`~chainmodel.models.static_tension.seat_series_compliance`), no floor, and under
+    gravity the free length at which the law at rest gives :func:`weighted_static_tension`.
+
+    ``stretch`` [N^2 m] is the sag term the level's own span law adds at rest (level 2's
+    string modes: :func:`~chainmodel.models.span_sag.sag_term` with its mode count; 0 at levels
+    0-1): the ends give that stretch away again, 2 f grows by stretch / T_0^2, so the level
+    holds the static tension at rest once and not the sag twice."""
     if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
         try:
             fit = wrap_fit(drive, params)
             _FAILED.pop(_key(drive, params), None)
-            return fit.compliance, fit.free_length, fit.softness
+            return (fit.compliance, fit.free_length + _given_back(stretch, fit.static_tension),
+                    fit.softness)
         except ValueError as exc:    # reported by unavailable() (chainmodel.validity)
             _FAILED[_key(drive, params)] = str(exc)
     c, f = ST.seat_series_compliance(params, drive)
-    if sag and hangs_on_its_sag(drive, params):
-        t0 = sag_tension(drive, params)
-        if t0 is not None:
-            k = params["chain.link_stiffness"]
-            excess, links = ST.rest_geometry(drive)
-            return c, 0.5 * (excess - t0 * (links / k + 2.0 * c)), 0.0
-    return c, f, 0.0
+    if drive is None or drive.links is None or params["gravity"] == 0.0:
+        return c, f, 0.0
+    t0 = weighted_static_tension(drive, params)
+    x, d = _ladder(drive, params)
+    if t0 <= 0.0:           # slack at rest (no parabola holds it): the ladder's ends
+        return c, f, 0.0
+    return c, 0.5 * (x - t0 * d) + _given_back(stretch, t0), 0.0
+
+
+def _given_back(stretch: float, t0: float) -> float:
+    return 0.5 * stretch / (t0 * t0) if stretch > 0.0 and t0 > 0.0 else 0.0
+
+
+def _ladder(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
+    """(X, D) of the seat ladder's static law without its free length: T_raw = (X - 2 f) / D
+    (static_tension.static_numerator's X + 2 f)."""
+    k = params["chain.link_stiffness"]
+    excess, links = ST.rest_geometry(drive)
+    c, _ = ST.seat_series_compliance(params, drive)
+    return excess + links * params["chain.pretension"] / k, links / k + 2.0 * c
+
+
+def weighted_static_tension(drive: Drive, params: Mapping[str, Any], *,
+                            exact: bool = True) -> float:
+    """Levels 0-2's static span tension at rest, no load, the spans' weight included [N]: the
+    elastic catenary on the seat ladder (:mod:`chainmodel.models.span_sag`), T^3 - T_raw T^2 -
+    S / D = 0. Where the weight carries a large share of it the sag term S is taken from level
+    3's statics instead of the parabola (:func:`_calibrated_sag_term`): with mu = 1 - T_raw / T
+    the weight's share at the parabola's S, S_eff = S + (S_3 - S) s((mu - MU_LOW) / (MU_HIGH -
+    MU_LOW)), s the smoothstep, so the tension is continuous in the pretension, a chain with no
+    pretension that the ladder leaves slack (mu >= 1) carries level 3's sag tension exactly,
+    and a pretensioned drive (mu < MU_LOW) never asks for level 3's statics. ``exact=False``
+    skips that (the parabola's S throughout: within 7 % where they differ, docs/reduced_models.md)."""
+    if drive.links is None:
+        return params["chain.pretension"]
+    c, f = ST.seat_series_compliance(params, drive)
+    x, d = _ladder(drive, params)
+    raw = (x - 2.0 * f) / d
+    s = SG.sag_term(drive, params)
+    t = SG.tension(raw, s / d)
+    if s > 0.0 and SG.deep(drive, params, t):
+        # no shallow parabola: level 3's statics where they find an equilibrium (a chain this
+        # long takes no pretension: pretension_error), else the ladder's 0 N
+        t3 = sag_tension(drive, params) if exact else None
+        return max(raw, 0.0) if t3 is None else t3
+    if s <= 0.0 or not exact:
+        return t
+    mu = 1.0 - raw / t
+    if mu <= MU_LOW:
+        return t
+    s3 = _calibrated_sag_term(drive, params)
+    if s3 is None:
+        return t
+    u = min(1.0, (mu - MU_LOW) / (MU_HIGH - MU_LOW))
+    return SG.tension(raw, (s + (s3 - s) * u * u * (3.0 - 2.0 * u)) / d)
+
+
+def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | None:
+    """The sag term S_3 [N^2 m] at which the elastic catenary on the seat ladder gives level
+    3's static tension of this chain with no pretension (:func:`sag_tension`), or None where
+    level 3 has no equilibrium, carries no more than the ladder's raw law, or needs a sag term
+    more than ``SAG_RATIO`` times off the parabola's."""
+    p0 = dict(params, **{"chain.pretension": 0.0})
+    t3 = sag_tension(drive, p0)
+    if t3 is None:
+        return None
+    c, f = ST.seat_series_compliance(p0, drive)
+    x, d = _ladder(drive, p0)
+    raw0 = (x - 2.0 * f) / d
+    if not t3 > max(raw0, 0.0):
+        return None
+    s3 = d * t3 * t3 * (t3 - raw0)
+    s = SG.sag_term(drive, p0)
+    if not 1.0 / SAG_RATIO <= s3 / s <= SAG_RATIO:
+        # level 3 parts from the ladder at rest for reasons other than the weight (a coarse
+        # polygon, seat flanks: docs/reduced_models.md "Not yet one quantity")
+        return None
+    return s3
 
 
 def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
@@ -187,14 +273,6 @@ def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
     if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
         return None
     return _FAILED.get(_key(drive, params))
-
-
-def hangs_on_its_sag(drive: Drive, params: Mapping[str, Any]) -> bool:
-    """True for a chain with no pretension that the seat ladder leaves without tension at rest
-    under gravity: its spans hang on their sag, a tension only level 3's statics carry (issue 21
-    item 4; docs/reduced_models.md, "One wrap and one static tension")."""
-    return (drive is not None and drive.links is not None and params["chain.pretension"] == 0.0
-            and params["gravity"] != 0.0 and ST.static_span_tension(drive, params) == 0.0)
 
 
 def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
@@ -216,20 +294,20 @@ def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     return _CACHE[key]
 
 
-def static_span_tension(drive: Drive, params: Mapping[str, Any], *, sag: bool = True) -> float:
-    """Levels 0-2's static span tension [N]: the span law at rest on :func:`span_ends`' (c, f),
-    floored - the seat ladder's (:func:`~chainmodel.models.static_tension.static_span_tension`),
-    or level 3's static tension with ``torsional.wrap_statics`` and, unless ``sag=False``, for a
-    chain that hangs on its sag. The scene's pretension search probes pretension 0 with
-    ``sag=False`` (without the statics' cost); level 2 passes it too (its string modes need a
-    taut span, so it refuses a chain that hangs on its sag)."""
+def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool = True) -> float:
+    """Levels 0-2's static span tension [N]: with ``torsional.wrap_statics`` the span law at
+    rest on :func:`span_ends`' (c, f), floored (level 3's static tension by construction);
+    else :func:`weighted_static_tension` (``exact`` passed on)."""
     if drive.links is None:
         return ST.static_span_tension(drive, params)
-    c, f, a = span_ends(drive, params, sag=sag)
-    k = params["chain.link_stiffness"]
-    excess, links = ST.rest_geometry(drive)
-    raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
-    return softplus(raw, a)
+    if params.get("torsional.wrap_statics"):
+        c, f, a = span_ends(drive, params)
+        if unavailable(drive, params) is None:
+            k = params["chain.link_stiffness"]
+            excess, links = ST.rest_geometry(drive)
+            raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
+            return softplus(raw, a)
+    return weighted_static_tension(drive, params, exact=exact)
 
 
 def softplus(raw: float, b: float) -> float:
