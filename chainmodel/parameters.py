@@ -211,7 +211,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        levels=(1, 2, 3)),
     # environment
     _p("gravity", 9.81, "m/s2", "gravitational acceleration (acts on the chain: its sag "
-       "tension at rest at every level, its spans' sag at levels 2-3)", minimum=0.0,
+       "tension at rest at every level, its spans' sag running at levels 1-3)", minimum=0.0,
        levels=(0, 1, 2, 3)),
     # levels 1-2
     _p("torsional.chain_inertia", True, "",

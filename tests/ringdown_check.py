@@ -6,7 +6,12 @@
 * :func:`two_inertia_frequency`: the two-inertia system written here - level 1's mass matrix,
   both spans as one spring of stiffness ``k_spans`` [N/m] acting on the sprockets' pitch radii,
   the input shaft's spring - and its mode with the largest share of kinetic energy in the driven
-  sprocket.
+  sprocket;
+* :func:`seat_ladder_spans`: that spring from the chain's values - each span's links in series
+  with the seat ladder at both ends (K_seat = k_c + k_l K_seat / (k_l + K_seat)), softened by its
+  sag under gravity with Ernst's equivalent modulus, k / (1 + (w_n l)^2 k l / (12 T^3)) (H.-J.
+  Ernst, Der E-Modul von Seilen unter Beruecksichtigung des Durchhanges, Der Bauingenieur 40,
+  1965; the tangent of the elastic catenary), the two spans in parallel.
 """
 
 from __future__ import annotations
@@ -35,6 +40,23 @@ def peak_frequency(result, band) -> float:
     f = np.fft.rfftfreq(n, t[1] - t[0])
     spec[(f < band[0]) | (f > band[1])] = 0.0
     return float(f[np.argmax(spec)])
+
+
+def seat_ladder_spans(scene) -> float:
+    """The two spans' stiffness [N/m] from the chain's values (module docstring)."""
+    p, d = scene.parameters, scene.drive
+    model = scene.model()
+    r, t0 = model.reference, model.static_tension()
+    kl, kc = p["chain.link_stiffness"], p["contact.stiffness"]
+    k_seat = 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
+    w = p["gravity"] * p["chain.link_mass"] / d.pitch
+    up = 1j * np.exp(1j * (d.centre_angle - p["drive.inclination"]))   # drive.inclination
+    total = 0.0
+    for s in ("up", "low"):
+        k = 1.0 / (r["n_" + s] / kl + 2.0 / k_seat)
+        wn = abs(w * float((np.conj(1j * np.exp(1j * r["dir_" + s])) * up).real))
+        total += k / (1.0 + (wn * r["l_" + s]) ** 2 * k * r["l_" + s] / (12.0 * t0 ** 3))
+    return total
 
 
 def two_inertia_frequency(scene, k_spans: float) -> float:

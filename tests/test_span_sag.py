@@ -139,3 +139,45 @@ def test_level2_at_rest_against_level3_on_long_spans():
         m = r.time >= 0.3
         means.append(0.5 * (r["tight_span.tension"][m].mean() + r["slack_span.tension"][m].mean()))
     assert means[0] == pytest.approx(means[1], rel=0.005)
+
+
+@pytest.mark.parametrize("delta_mm", [-2.0, -0.3, 0.0, 0.05])
+def test_level1_span_law_covers_the_parabolas_arc(delta_mm):
+    """Level 1's straight span under its weight (spans.py ``_tension`` with a sag term): the
+    chain in the span - its free length stretched by T / k_eff - covers the chord plus the arc
+    excess of the parabola it hangs in at that T (quadrature here), whether its stretch is
+    short of the chord (delta < 0: without weight it would be slack) or not."""
+    from chainmodel.kernels import spans
+    wn, k_link, links, seat_c = 10.0, 5.1e7, 25.0, 2e-8
+    p_free = 0.015875
+    # delta = chord - links p_free (no seat slack, no modal stretch)
+    chord = links * p_free + 1e-3 * delta_mm
+    sag = wn * wn * chord ** 3 / 24.0
+    k_eff = 1.0 / (links / k_link + seat_c)
+    t, _ = spans._tension(chord, 0.0, 0.0, links, p_free, k_eff, 0.0, 0.0, 0.0, 0.0, sag)
+    chain = links * p_free + t / k_eff
+    # the shallow parabola is Irvine's first order: the arc's next term is -(12/5)(d/L)^2 of it
+    ratio = wn * chord / (8.0 * t)
+    assert _arc_excess(wn, chord, t) == pytest.approx(chain - chord,
+                                                      rel=1e-3 + 3.0 * ratio * ratio)
+    # without weight: the linear law, slack below zero stretch
+    t0, _ = spans._tension(chord, 0.0, 0.0, links, p_free, k_eff, 0.0, 0.0, 0.0)
+    assert t0 == pytest.approx(max(0.0, k_eff * 1e-3 * delta_mm), abs=1e-9)
+    assert t > t0
+
+
+@pytest.mark.parametrize("s", [1.0, 1.4e5, 1.35e6, 1e9])
+def test_the_kernels_root_is_the_cubics_in_every_regime(s):
+    """spans._sagging (series for a taut span, Pade and Halley in between, scaled Halley for a
+    span hanging on its sag) against the cubic itself, with and without the cube root the model
+    precomputes: each regime and the seams between them."""
+    from chainmodel.kernels import spans
+    c = s ** (1.0 / 3.0)
+    raws = np.concatenate([np.linspace(-50 * c, 50 * c, 20001), -np.logspace(-3, 7, 400),
+                           np.logspace(-3, 7, 400)])
+    for root in (0.0, c):
+        t = np.array([spans._sagging(float(r), s, root) for r in raws])
+        assert np.all(t >= np.maximum(raws, 0.0)) and np.all(t > 0.0)
+        residual = t ** 3 - raws * t ** 2 - s
+        scale = np.maximum(t ** 3, s) + np.abs(raws) * t ** 2
+        assert np.max(np.abs(residual) / scale) < 1e-9

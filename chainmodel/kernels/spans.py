@@ -202,7 +202,13 @@ P_D2, P_J11, P_J12, P_J22, P_RHOA, P_MODES, P_LBAR_U, P_LBAR_L = range(8, 16)
 P_ZETA, P_W1_U, P_W1_L, P_IMPULSE, P_REF_U, P_REF_L, P_GN_U, P_GN_L, P_PITCH = range(16, 25)
 P_NBAR_U, P_NBAR_L = range(25, 27)
 P_SOFT = 27          # floor a [N] under the slack span (torsional.wrap_statics; 0: none)
-P_SIZE = 28
+P_SAG_U, P_SAG_L = 28, 29   # sag term S [N^2 m] of each straight span (level 1; 0: none)
+P_SAGC_U, P_SAGC_L = 30, 31  # (S k_eff)^(1/3) [N] at the tooth-period-mean link count (0: none)
+# k_eff [N/m] and c_link / n [N s/m] of each span at its tooth-period-mean link count
+# (torsional.mean_link_compliance: constant, so computed once; 0: from the current count)
+P_KEFF_U, P_KEFF_L, P_CN_U, P_CN_L = 32, 33, 34, 35
+P_INV_J22, P_INV_DET = 36, 37   # 1 / J22 and 1 / (J11 J22 - J12^2) of the constant mass matrix
+P_SIZE = 38
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
@@ -235,19 +241,76 @@ def _coriolis(k, j):
 
 
 @jit_noalloc
-def _tension(length, stretch_modal, stretch_rate, links, p_free, k_link, c_link, seat_c,
-             seat_slack, length_rate, links_compliance, soft=0.0):
+def _sagging(raw, s_over_d, cube_root=0.0):
+    """The positive root T of T^3 - raw T^2 - s_over_d = 0 (models/span_sag.py ``tension``,
+    the elastic catenary), written for the stepping loop's cost (a few divisions, no loop).
+    With e = s_over_d / raw^3 and T = raw (1 + x), x (1 + x)^2 = e:
+
+    * e < 0.02 (a taut span): x's series, a_n = (-1)^(n-1) C(3n-2, n-1) / n (Lagrange inversion,
+      radius 4/27), eight terms;
+    * e < 0.2: its Pade approximant [2/2], x = e (1 + 10 e / 3) / (1 + 16 e / 3 + 11 e^2 / 3)
+      (within 4e-4 of x), and one Halley step (cubic convergence);
+    * else (a span hanging on its sag): in units of c = s_over_d^(1/3) (``cube_root`` when the
+      caller has it, else computed), y = T / c solves y^2 (y - r) = 1 with r = raw / c; a start
+      within 6 % (r + 1 / (1 + r^2) for r >= 0, 1 / sqrt(1 - r) below) and two Halley steps.
+
+    Within 3e-10 of the root everywhere (tests/test_span_sag.py), and smooth: no iteration
+    count depends on the input."""
+    r3 = raw * raw * raw
+    if r3 > 50.0 * s_over_d:
+        e = s_over_d / r3
+        x = e * (1.0 + e * (-2.0 + e * (7.0 + e * (-30.0 + e * (143.0 + e * (-728.0 + e * (
+            3876.0 - 21318.0 * e)))))))
+        return raw * (1.0 + x)
+    if r3 > 5.0 * s_over_d:
+        # the Pade approximant in e = s / r3, over one denominator
+        t = raw * (1.0 + s_over_d * (3.0 * r3 + 10.0 * s_over_d)
+                   / (r3 * (3.0 * r3 + 16.0 * s_over_d) + 11.0 * s_over_d * s_over_d))
+        steps = 1
+    else:
+        c = cube_root if cube_root > 0.0 else s_over_d ** (1.0 / 3.0)
+        # c y's start: raw + s / (c^2 + raw^2) for raw >= 0, sqrt(s / (c - raw)) below
+        if raw >= 0.0:
+            t = raw + s_over_d / (c * c + raw * raw)
+        else:
+            t = math.sqrt(s_over_d / (c - raw))
+        steps = 2
+    for _ in range(steps):
+        f = t * t * (t - raw) - s_over_d
+        d1 = t * (3.0 * t - 2.0 * raw)
+        t -= 2.0 * f * d1 / (2.0 * d1 * d1 - f * (6.0 * t - 2.0 * raw))
+    return t
+
+
+@jit_noalloc
+def span_stiffness(links_compliance, k_link, c_link, seat_c):
+    """(k_eff [N/m], c_link / n [N s/m]) of a span of ``links_compliance`` links with the seats'
+    compliance in series (:func:`_tension`); the model precomputes them where the count is the
+    tooth-period mean (P_KEFF_*, P_CN_*), the kernel otherwise."""
+    return 1.0 / (links_compliance / k_link + seat_c), c_link / links_compliance
+
+
+@jit_noalloc
+def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
+             seat_slack, length_rate, soft=0.0, sag=0.0, sag_root=0.0):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
     change marks the switch: min(k delta, T_raw), continuous through both ways of going slack.
 
-    The stretch uses the span's current link count ``links``; its compliance and damping use
-    ``links_compliance`` - the same count, or the tooth-period mean (torsional.
+    The stretch uses the span's current link count ``links``; its stiffness k_eff and damping
+    c_n (:func:`span_stiffness`) use the same count, or the tooth-period mean (torsional.
     mean_link_compliance): a seating roller's link keeps its elongation on the sprocket, so the
-    span does not stiffen by a whole link at the event and the tension stays continuous."""
-    k_eff = 1.0 / (links_compliance / k_link + seat_c)
+    span does not stiffen by a whole link at the event and the tension stays continuous.
+
+    ``sag`` > 0 (level 1's straight spans under their weight, S = w_n^2 L^3 / 24): the span's
+    chord is shorter than the chain in it by its quasi-static sag S / T^2, so
+    T^3 - T_raw T^2 - S k_eff = 0 (:func:`_sagging`; ``sag_root`` its (S k_eff)^(1/3) where
+    the caller has it): a span whose stretch runs out hangs on its sag tension instead of going
+    slack (docs/reduced_models.md, "One static tension")."""
     delta = length + stretch_modal - links * p_free - seat_slack
-    raw = k_eff * delta + (c_link / links_compliance) * (length_rate + stretch_rate)
+    raw = k_eff * delta + c_n * (length_rate + stretch_rate)
     switch = min(k_eff * delta, raw)
+    if sag > 0.0:
+        return _sagging(raw, sag * k_eff, sag_root), switch
     if soft > 0.0:
         # the wrap's floor under the slack span (wrap_statics.py): the hyperbola
         # (T_raw + sqrt(T_raw^2 + 4 a^2)) / 2, T_raw + a^2 / T_raw well above a, a at zero
@@ -350,12 +413,18 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     # --- tensions (seed 004 eq 37 in dimensional form, both spans)
     rate_u = aue * w1 - aus * w2
     rate_l = -als * w1 + ale * w2
-    nc_u = nu if P[P_NBAR_U] <= 0.0 else P[P_NBAR_U]
-    nc_l = nl if P[P_NBAR_L] <= 0.0 else P[P_NBAR_L]
-    t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_u, nc_u, P[P_SOFT])
-    t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C],
-                        P[P_SEAT_SLACK], rate_l, nc_l, P[P_SOFT])
+    if P[P_KEFF_U] > 0.0:
+        ke_u, cn_u = P[P_KEFF_U], P[P_CN_U]
+    else:
+        ke_u, cn_u = span_stiffness(nu, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C])
+    if P[P_KEFF_L] > 0.0:
+        ke_l, cn_l = P[P_KEFF_L], P[P_CN_L]
+    else:
+        ke_l, cn_l = span_stiffness(nl, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C])
+    t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
+                        P[P_SOFT], P[P_SAG_U], P[P_SAGC_U])
+    t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
+                        P[P_SOFT], P[P_SAG_L], P[P_SAGC_L])
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
     j11 = P[P_J11]
@@ -363,16 +432,16 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     j22 = P[P_J22]
     if rigid:
         acc1 = a_in
-        acc2 = (q2 - j12 * a_in) / j22
+        acc2 = (q2 - j12 * a_in) * P[P_INV_J22]
         tau_in = j11 * a_in + j12 * acc2 + t_u * aue - t_l * als
         dx[0] = w2
         dx[1] = acc2
     else:
         tau_in = P[P_K_SHAFT] * (th_in - phi1) + P[P_C_SHAFT] * (w_in - w1)
         q1 = tau_in - t_u * aue + t_l * als
-        det = j11 * j22 - j12 * j12
-        acc1 = (j22 * q1 - j12 * q2) / det
-        acc2 = (j11 * q2 - j12 * q1) / det
+        inv_det = P[P_INV_DET]
+        acc1 = (j22 * q1 - j12 * q2) * inv_det
+        acc2 = (j11 * q2 - j12 * q1) * inv_det
         dx[0] = w1
         dx[1] = w2
         dx[2] = acc1

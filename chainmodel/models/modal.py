@@ -33,6 +33,7 @@ sign of eq 47.
 from __future__ import annotations
 
 import math
+from functools import cached_property
 from typing import Any, ClassVar, Mapping
 
 import numpy as np
@@ -90,12 +91,14 @@ class ModalModel(TorsionalModel):
                 f"or shorten drive.centre_distance")
         self._fill_modal_parameters(t0)
 
-    def sag_stretch(self) -> float:
+    @cached_property
+    def _sag_terms(self) -> tuple[float, float]:
         """The string modes' sag under gravity stretches the spans by S_N / T^2 at rest (S_N
         the modal sum of the elastic catenary's sag term, :func:`~chainmodel.models.span_sag.
         sag_term`): the span law's ends give it away again, so the static tension is held once
-        (wrap_statics.span_ends)."""
-        return sag_term(self.drive, self.params, modes=self.n_modes)
+        (wrap_statics.span_ends). Returned whole as the upper span's share (only the sum is
+        used: the kernel's straight-span sag is level 1's)."""
+        return sag_term(self.drive, self.params, modes=self.n_modes), 0.0
 
     def _fill_modal_parameters(self, t0: float) -> None:
         p, d, r, P = self.params, self.drive, self.reference, self.P

@@ -21,7 +21,11 @@ series; with ``torsional.seat_compliance`` the seats' ladder compliance is added
 cannot push: at zero stretch or zero tension it goes slack (the outputs add the centrifugal
 tension rho A v^2 on top, docs/stability.md), and that switch is an event of the
 steppers (:meth:`TorsionalModel.switching_functions`), as are the seating and release events at
-all four span ends. At zero stretch the spans lie exactly where level 0 puts them, so polygonal
+all four span ends. Under gravity each straight span also hangs in its quasi-static sag, whose
+arc S / T^2 (S = w_n^2 L^3 / 24, the elastic catenary of :mod:`.span_sag`) the chain in it must
+cover: T^3 - T_raw T^2 - S k_eff = 0 with T_raw the law above, so a span whose stretch runs out
+keeps its sag tension instead of going slack (level 2's string modes hold their sag
+themselves; docs/reduced_models.md, "One static tension, gravity included"). At zero stretch the spans lie exactly where level 0 puts them, so polygonal
 action and the varying wrapping length excite the drive by themselves.
 
 J11, J12, J22: the sprocket inertias plus, with ``torsional.chain_inertia`` (default), the chain's
@@ -48,7 +52,7 @@ from ..kernels import spans as S
 from . import limits
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_stiffness
-from .wrap_statics import span_ends, static_span_tension
+from .wrap_statics import span_ends, span_sag_terms, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -141,12 +145,16 @@ class TorsionalModel(Model):
     @cached_property
     def _span_ends(self) -> tuple[float, float, float]:
         """(compliance, free length, slack-span floor) of the span law, once per model."""
-        return span_ends(self.drive, self.params, stretch=self.sag_stretch())
+        return span_ends(self.drive, self.params, stretch=sum(self._sag_terms))
 
-    def sag_stretch(self) -> float:
-        """The sag term [N^2 m] this level's span law adds at rest by itself: none here (the
-        spans are straight; span_sag); level 2's string modes hold one."""
-        return 0.0
+    @cached_property
+    def _sag_terms(self) -> tuple[float, float]:
+        """(S_upper, S_lower) [N^2 m] the span law holds itself: here each straight span's
+        quasi-static sag (wrap_statics.span_sag_terms; not with torsional.wrap_statics, whose
+        fitted ends and floor hold level 3's statics); level 2's string modes hold theirs."""
+        if self.params["torsional.wrap_statics"]:
+            return 0.0, 0.0
+        return span_sag_terms(self.drive, self.params)
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -156,17 +164,32 @@ class TorsionalModel(Model):
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
         P[S.P_SOFT] = self._span_ends[2]
+
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]
         P[S.P_D2] = p["driven.damping"]
         mm = self.mass_matrix()
         P[S.P_J11], P[S.P_J12], P[S.P_J22] = mm[0, 0], mm[0, 1], mm[1, 1]
+        # divisions the kernel would repeat at every evaluation (the matrix is constant)
+        P[S.P_INV_J22] = 1.0 / mm[1, 1]
+        P[S.P_INV_DET] = 1.0 / (mm[0, 0] * mm[1, 1] - mm[0, 1] * mm[0, 1])
         P[S.P_RHOA] = p["chain.link_mass"] / d.pitch
         P[S.P_MODES] = self.n_modes
         P[S.P_PITCH] = d.pitch
         if p["torsional.mean_link_compliance"]:
             P[S.P_NBAR_U], P[S.P_NBAR_L] = self.reference["n_up"], self.reference["n_low"]
+            # constant span stiffness and damping, computed once instead of per evaluation
+            for nbar, keff, cn in ((S.P_NBAR_U, S.P_KEFF_U, S.P_CN_U),
+                                   (S.P_NBAR_L, S.P_KEFF_L, S.P_CN_L)):
+                P[keff], P[cn] = S.span_stiffness(P[nbar], P[S.P_K_LINK], P[S.P_C_LINK],
+                                                  P[S.P_SEAT_C])
+        if self.n_modes == 0:
+            P[S.P_SAG_U], P[S.P_SAG_L] = self._sag_terms
+            for sag, keff, root in ((S.P_SAG_U, S.P_KEFF_U, S.P_SAGC_U),
+                                    (S.P_SAG_L, S.P_KEFF_L, S.P_SAGC_L)):
+                if P[sag] > 0.0 and P[keff] > 0.0:
+                    P[root] = (P[sag] * P[keff]) ** (1.0 / 3.0)
         return P
 
     # --- state -----------------------------------------------------------------------------

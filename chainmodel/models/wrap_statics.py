@@ -47,7 +47,7 @@ from . import span_sag as SG
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
-           "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
+           "weighted", "span_sag_terms", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -210,6 +210,26 @@ def _ladder(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
 
 def weighted_static_tension(drive: Drive, params: Mapping[str, Any], *,
                             exact: bool = True) -> float:
+    """:func:`weighted` 's tension [N]."""
+    return weighted(drive, params, exact=exact)[0]
+
+
+def span_sag_terms(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
+    """(S_upper, S_lower) [N^2 m]: each span's sag term (span_sag), scaled as
+    :func:`weighted` scales their sum, for level 1's straight spans (spans.py ``_tension``); (0,
+    0) without weight or for a sag too deep for the parabola."""
+    if drive.links is None or params["gravity"] == 0.0:
+        return 0.0, 0.0
+    s_eff = weighted(drive, params)[1]
+    s = SG.sag_term(drive, params)
+    if not s_eff > 0.0 or not s > 0.0:
+        return 0.0, 0.0
+    return tuple(s_eff / s * wn * wn * length ** 3 / 24.0
+                 for wn, length in SG.normal_weights(drive, params))
+
+
+def weighted(drive: Drive, params: Mapping[str, Any], *,
+             exact: bool = True) -> tuple[float, float]:
     """Levels 0-2's static span tension at rest, no load, the spans' weight included [N]: the
     elastic catenary on the seat ladder (:mod:`chainmodel.models.span_sag`), T^3 - T_raw T^2 -
     S / D = 0. Where the weight carries a large share of it the sag term S is taken from level
@@ -218,9 +238,12 @@ def weighted_static_tension(drive: Drive, params: Mapping[str, Any], *,
     MU_LOW)), s the smoothstep, so the tension is continuous in the pretension, a chain with no
     pretension that the ladder leaves slack (mu >= 1) carries level 3's sag tension exactly,
     and a pretensioned drive (mu < MU_LOW) never asks for level 3's statics. ``exact=False``
-    skips that (the parabola's S throughout: within 7 % where they differ, docs/reduced_models.md)."""
+    skips that (the parabola's S throughout: within 7 % where they differ, docs/reduced_models.md).
+
+    Returns (T [N], S_eff [N^2 m]); S_eff 0 where there is no weight or the sag is too deep for
+    the parabola (then T is level 3's statics or the ladder's)."""
     if drive.links is None:
-        return params["chain.pretension"]
+        return params["chain.pretension"], 0.0
     c, f = ST.seat_series_compliance(params, drive)
     x, d = _ladder(drive, params)
     raw = (x - 2.0 * f) / d
@@ -230,17 +253,18 @@ def weighted_static_tension(drive: Drive, params: Mapping[str, Any], *,
         # no shallow parabola: level 3's statics where they find an equilibrium (a chain this
         # long takes no pretension: pretension_error), else the ladder's 0 N
         t3 = sag_tension(drive, params) if exact else None
-        return max(raw, 0.0) if t3 is None else t3
+        return (max(raw, 0.0) if t3 is None else t3), 0.0
     if s <= 0.0 or not exact:
-        return t
+        return t, s
     mu = 1.0 - raw / t
     if mu <= MU_LOW:
-        return t
+        return t, s
     s3 = _calibrated_sag_term(drive, params)
     if s3 is None:
-        return t
+        return t, s
     u = min(1.0, (mu - MU_LOW) / (MU_HIGH - MU_LOW))
-    return SG.tension(raw, (s + (s3 - s) * u * u * (3.0 - 2.0 * u)) / d)
+    s_eff = s + (s3 - s) * u * u * (3.0 - 2.0 * u)
+    return SG.tension(raw, s_eff / d), s_eff
 
 
 def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | None:

@@ -6,12 +6,15 @@ spacing of the zero crossings of the speed minus its running tooth-period mean, 
 peak of a Hann-windowed spectrum). The analytical estimate: the driven sprocket's inertia J_2
 (plus the seated chain's m R^2 per seated roller) on the two spans in parallel, each of n
 links in series with the wrap at both ends, k_span = 1 / (n / k_link + 2 / K_seat),
-K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (the seat ladder, docs/reduced_models.md), and
+K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (the seat ladder, docs/reduced_models.md),
+softened by the span's sag with Ernst's modulus (tests/ringdown_check.py), and
 f = sqrt(R_o^2 (k_up + k_low) / J_2) / 2 pi (rigid input shaft: the driver held by the input;
 a flexible one: the two-inertia system with the shaft spring, the driven sprocket's mode).
 
     python docs/scripts/ringdown.py                # C1 and xu2010, levels 1-3
     python docs/scripts/ringdown.py C1 1,3         # one scene, some levels
+    python docs/scripts/ringdown.py variants       # C1: level 3 vs the estimate, one value
+                                                   # changed at a time (about 5 s)
 """
 
 from __future__ import annotations
@@ -23,11 +26,10 @@ from pathlib import Path
 import numpy as np
 
 import chainmodel
-from chainmodel.models.static_tension import seat_stiffness
 from chainmodel.scene import load_scene
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
-from ringdown_check import peak_frequency, two_inertia_frequency  # noqa: E402
+from ringdown_check import peak_frequency, seat_ladder_spans, two_inertia_frequency  # noqa: E402
 
 RPM = 5.0
 DURATION = 0.5
@@ -36,16 +38,12 @@ DURATION = 0.5
 def analytical(name, **kw):
     """Undamped two-inertia estimate [Hz]: the sprockets (mass matrix of level 1, chain
     inertia included) on the two spans in parallel, each span's n links in series with the
-    seat ladder at both ends, and the input shaft's spring on the driver (none if rigid); the
+    seat ladder at both ends and softened by its sag (Ernst's modulus), and the input shaft's
+    spring on the driver (none if rigid); the
     mode with the largest share of its kinetic energy in the driven sprocket (the tests' own
     two-inertia system, tests/ringdown_check.py)."""
     sc = load_scene(name, fidelity=1, **kw)
-    p = sc.parameters
-    r = sc.model().reference
-    kl, kc = p["chain.link_stiffness"], p["contact.stiffness"]
-    ks = seat_stiffness(kc, kl)
-    return two_inertia_frequency(sc, sum(1.0 / (n / kl + 2.0 / ks)
-                                         for n in (r["n_up"], r["n_low"])))
+    return two_inertia_frequency(sc, seat_ladder_spans(sc))
 
 
 def ring(name, level, band=None, **kw):
@@ -58,7 +56,37 @@ def ring(name, level, band=None, **kw):
     return peak_frequency(r, band or (10.0, np.inf)), time.time() - t0
 
 
+C1_VARIANTS = (("defaults", {}),
+               ("no seat clearance", {"contact_seat_radius": None}),
+               ("chain.joint_clearance = 0", {"chain_joint_clearance": 0.0}),
+               ("contact.stiffness x2", {"contact_stiffness": 2.0}),
+               ("contact.stiffness x0.5", {"contact_stiffness": 0.5}),
+               ("static tension 1000 N", {"static_tension": 1000.0}))
+
+
+def variants():
+    """C1's level 3 against the estimate with one value changed at a time, and level 1 with
+    the seat ladder (torsional.seat_compliance) against it."""
+    base = load_scene("C1").parameters
+    print(f"{'C1 with':28s} {'estimate':>9s} {'level 3':>8s} {'vs est.':>8s}")
+    for label, kw in C1_VARIANTS:
+        kw = dict(kw)
+        if "contact_seat_radius" in kw:
+            kw["contact_seat_radius"] = base["chain.roller_radius"]
+        if "contact_stiffness" in kw:
+            kw["contact_stiffness"] *= base["contact.stiffness"]
+        est = analytical("C1", **kw)
+        f3 = ring("C1", 3, band=(0.6 * est, 1.4 * est), **kw)[0]
+        print(f"{label:28s} {est:9.2f} {f3:8.2f} {100 * (f3 / est - 1):+7.1f}%", flush=True)
+    est = analytical("C1")
+    f1 = ring("C1", 1, band=(0.6 * est, 1.4 * est), torsional_seat_compliance=True)[0]
+    print(f"{'level 1, seat_compliance':28s} {est:9.2f} {f1:8.2f} {100 * (f1 / est - 1):+7.1f}%"
+          " (level 1)", flush=True)
+
+
 def main(argv):
+    if argv[1:2] == ["variants"]:
+        return variants()
     names = argv[1].split(",") if len(argv) > 1 else ["C1", "xu2010"]
     levels = [int(v) for v in argv[2].split(",")] if len(argv) > 2 else [1, 2, 3]
     print("strongest peak of the driven speed above 10 Hz within 0.6-1.4 x the estimate of the "
