@@ -25,8 +25,9 @@ all four span ends. Under gravity each straight span also hangs in its quasi-sta
 arc S / T^2 (S = w_n^2 L^3 / 24, the elastic catenary of :mod:`.span_sag`) the chain in it must
 cover: T^3 - T_raw T^2 - S k_eff = 0 with T_raw the law above, so a span whose stretch runs out
 keeps its sag tension instead of going slack (level 2's string modes hold their sag
-themselves; docs/reduced_models.md, "One static tension, gravity included"). At zero stretch the spans lie exactly where level 0 puts them, so polygonal
-action and the varying wrapping length excite the drive by themselves.
+themselves; docs/reduced_models.md, "One static tension, gravity included"). At zero stretch
+the spans lie exactly where level 0 puts them, so polygonal action and the varying wrapping
+length excite the drive by themselves.
 
 J11, J12, J22: the sprocket inertias plus, with ``torsional.chain_inertia`` (default), the chain's
 mass: rollers on a sprocket at its pitch radius and each span's rollers moving with their
@@ -164,7 +165,6 @@ class TorsionalModel(Model):
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
         P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
         P[S.P_SOFT] = self._span_ends[2]
-
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]
