@@ -189,23 +189,15 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0
     if drive is None or drive.links is None or params["gravity"] == 0.0:
         return c, f, 0.0
     t0 = weighted_static_tension(drive, params)
-    x, d = _ladder(drive, params)
     if t0 <= 0.0:           # slack at rest (no parabola holds it): the ladder's ends
         return c, f, 0.0
-    return c, 0.5 * (x - t0 * d) + _given_back(stretch, t0), 0.0
+    # the free length at which the ladder's law T_raw = (X - 2 f) / D gives t0 at rest
+    x, d = ST.static_numerator(drive, params)
+    return c, f + 0.5 * (x - t0 * d) + _given_back(stretch, t0), 0.0
 
 
 def _given_back(stretch: float, t0: float) -> float:
     return 0.5 * stretch / (t0 * t0) if stretch > 0.0 and t0 > 0.0 else 0.0
-
-
-def _ladder(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
-    """(X, D) of the seat ladder's static law without its free length: T_raw = (X - 2 f) / D
-    (static_tension.static_numerator's X + 2 f)."""
-    k = params["chain.link_stiffness"]
-    excess, links = ST.rest_geometry(drive)
-    c, _ = ST.seat_series_compliance(params, drive)
-    return excess + links * params["chain.pretension"] / k, links / k + 2.0 * c
 
 
 def weighted_static_tension(drive: Drive, params: Mapping[str, Any], *,
@@ -244,9 +236,8 @@ def weighted(drive: Drive, params: Mapping[str, Any], *,
     the parabola (then T is level 3's statics or the ladder's)."""
     if drive.links is None:
         return params["chain.pretension"], 0.0
-    c, f = ST.seat_series_compliance(params, drive)
-    x, d = _ladder(drive, params)
-    raw = (x - 2.0 * f) / d
+    x, d = ST.static_numerator(drive, params)
+    raw = x / d
     s = SG.sag_term(drive, params)
     t = SG.tension(raw, s / d)
     if s > 0.0 and SG.deep(drive, params, t):
@@ -276,9 +267,8 @@ def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | Non
     t3 = sag_tension(drive, p0)
     if t3 is None:
         return None
-    c, f = ST.seat_series_compliance(p0, drive)
-    x, d = _ladder(drive, p0)
-    raw0 = (x - 2.0 * f) / d
+    x, d = ST.static_numerator(drive, p0)
+    raw0 = x / d
     if not t3 > max(raw0, 0.0):
         return None
     s3 = d * t3 * t3 * (t3 - raw0)
