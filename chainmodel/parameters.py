@@ -227,10 +227,11 @@ PARAMETERS: tuple[Parameter, ...] = (
        kind=bool, levels=(0, 1, 2)),
     _p("torsional.wrap_statics", False, "",
        "at levels 0-2 take each span end's compliance, free length and a floor under the slack "
-       "span from level 3's static equilibrium of the same drive (its rollers, links, seats with "
-       "clearance and flanks, gravity), condensed onto the driven sprocket: the static tension "
-       "is level 3's, the driven sprocket's stiffness its condensed one and the loaded split at "
-       "rest follows level 3's (docs/reduced_models.md, \"One wrap\"); off, "
+       "span from level 3 of the same drive (its rollers, links, seats with clearance and "
+       "flanks, gravity): the static tension is level 3's static equilibrium's, the driven "
+       "sprocket's torsional mode level 3's linear one (its statics and span rollers' inertia) "
+       "and the loaded split at rest follows level 3's statics (docs/reduced_models.md, \"One "
+       "wrap\"); off, "
        "torsional.seat_compliance decides and the spans' weight adds the elastic catenary's "
        "sag tension (docs/reduced_models.md, \"One static tension\")", kind=bool,
        levels=(0, 1, 2)),

@@ -1,7 +1,7 @@
 """The driven sprocket's torsional mode, measured and estimated independently of the models
 (issue 21 items 3 and 6; shared by tests/test_top_rung.py and tests/test_wrap_statics.py).
 
-* :func:`ring`: the driven speed's ring-down after a sudden start to 5 rpm without load, its
+* :func:`ring`: the driven speed's ring-down after a sudden start (5 rpm unless told) without load, its
   spectral peak (Hann window, 16x zero padding, linear trend removed) inside a band;
 * :func:`two_inertia_frequency`: the two-inertia system written here - level 1's mass matrix,
   both spans as one spring of stiffness ``k_spans`` [N/m] acting on the sprockets' pitch radii,
@@ -23,9 +23,10 @@ import numpy as np
 import chainmodel
 
 
-def ring(name, level, band, **kw) -> float:
-    """Frequency [Hz] of the driven speed's ring-down (module docstring) within ``band``."""
-    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=5.0, ramp_time=0.0,
+def ring(name, level, band, rpm=5.0, **kw) -> float:
+    """Frequency [Hz] of the driven speed's ring-down (module docstring) within ``band``, after
+    a sudden start to ``rpm``."""
+    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=rpm, ramp_time=0.0,
                             load_torque=0.0, duration=0.5, output_interval=5e-5, **kw)
     return peak_frequency(r, band)
 

@@ -9,11 +9,12 @@ independently of the ring-down and of chainmodel.models.wrap_statics (tests/line
 * the static (Guyan) condensation of that linearisation onto the two sprocket rotations, and
   the partial ones that keep some rollers' inertia.
 
-They show that the ring-down measures level 3's linear mode, that levels 1-2's condensed wrap
-(``torsional.wrap_statics``: K_3 from level 3's statics) is the Guyan condensation, and what
-Guyan leaves out on xu2010: its spans' inertia, which at 600 Hz (ten times their first string
-mode) does not follow the static span shapes (docs/reduced_models.md, "Item 3, the torsional
-mode").
+They show that the ring-down measures level 3's linear mode, that the secant stiffness K_3 of
+level 3's statics (wrap_fit.stiffness) is the Guyan condensation, and what Guyan leaves out on
+xu2010: its spans' inertia, which at 600 Hz (ten times their first string mode) does not follow
+the static span shapes - why levels 1-2's wrap (``torsional.wrap_statics``) takes level 3's
+linear mode, not its statics, for its stiffness (docs/reduced_models.md, "One wrap: level 3
+condensed at its mode").
 """
 
 from __future__ import annotations
@@ -38,9 +39,9 @@ def test_xu2010_ring_down_is_level3s_linear_mode(xu):
     assert f_lin == pytest.approx(ring("xu2010", 3, (0.8 * f_lin, 1.2 * f_lin)), rel=0.01)
 
 
-def test_xu2010_static_condensation_is_the_wrap_levels_1_2_take(xu):
-    """The Guyan condensation's driven-sprocket stiffness (driver held) is wrap_fit's K_3 within
-    1 %: levels 1-2 with torsional.wrap_statics hold level 3's statics onto the sprockets."""
+def test_xu2010_static_condensation_is_the_statics_secant(xu):
+    """The Guyan condensation's driven-sprocket stiffness (driver held) is the secant K_3 of
+    level 3's statics under a load step either way (wrap_fit.stiffness) within 1 %."""
     sc = xu.scene
     fit = wrap_fit(sc.drive, sc.parameters)
     slave = np.arange(2, xu.n)

@@ -47,7 +47,7 @@ from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 
-__all__ = ["StaticSolution", "solve_statics", "static_state"]
+__all__ = ["StaticSolution", "solve_statics", "static_state", "LinearMode", "linear_driven_mode"]
 
 #: relative force tolerance (of the weight per roller) of a converged solution
 TOLERANCE = 1e-3
@@ -357,3 +357,116 @@ def static_state(model, driver_angle: float = 0.0, load: float = 0.0) -> StaticS
         return solve_statics(model, driver_angle, load, start=sagged_layout(model, driver_angle))
     except ValueError:
         return solve_statics(model, driver_angle, load)
+
+
+@dataclass(frozen=True)
+class LinearMode:
+    """Level 3's driven-sprocket mode about a static equilibrium (:func:`linear_driven_mode`):
+    omega [rad/s] with the span rollers' inertia, omega_static [rad/s] of the static (Guyan)
+    condensation onto the sprocket rotations, the mode's share of kinetic energy in the driven
+    sprocket and its seated rollers, and the MAC pairing the two."""
+    omega: float
+    omega_static: float
+    share: float
+    mac: float = float("nan")
+
+
+def _condensed_modes(k, mass, keep):
+    """(omega^2 [n], shapes [full x n]) of the model with the coordinates not in ``keep``
+    condensed statically (Guyan: they follow their static shapes, T = [I; -K_ss^-1 K_sk], and
+    carry their mass through them); the shapes expanded to every coordinate."""
+    import scipy.linalg as sl
+    drop = np.setdiff1d(np.arange(k.shape[0]), keep)
+    T = np.zeros((k.shape[0], keep.size))
+    T[keep, np.arange(keep.size)] = 1.0
+    if drop.size:
+        try:
+            T[drop] = -sl.solve(k[np.ix_(drop, drop)], k[np.ix_(drop, keep)], assume_a="sym")
+        except (sl.LinAlgError, ValueError) as exc:
+            raise ValueError(f"level 3's rollers have no static stiffness to condense ({exc})")
+        if not np.all(np.isfinite(T)):
+            raise ValueError("level 3's rollers have no static stiffness to condense")
+    lam, vec = sl.eigh(T.T @ k @ T, T.T @ (mass[:, None] * T))
+    return lam, T @ vec
+
+
+def linear_driven_mode(model, solution: StaticSolution) -> LinearMode:
+    """Level 3's driven-sprocket mode about a static equilibrium ``solution`` (no load), small
+    amplitude, undamped.
+
+    K = -diag(m) dA/dq, the accelerations A of the dynamic model's own force law differentiated
+    by central differences in every position at zero velocity (the joint and link dampers act
+    on velocities only), symmetrised; the input shaft held at the driver's angle, so with a
+    rigid shaft the driver is held and otherwise it turns on the shaft's spring; masses the
+    sprocket inertias and the link mass per roller (2 + 2 M unknowns, dense; milliseconds for
+    the presets' chains).
+
+    Which mode: first every roller condensed statically onto the sprocket rotations (Guyan:
+    each roller follows its static shape, T = [I; -K_rr^-1 K_rs], and carries its mass
+    through it); of its modes (two where the driver is free) the one with the largest share of
+    its kinetic energy in the driven sprocket and its seated rollers. That is the static
+    wrap. Then
+    only the rollers seated on a sprocket (in contact at rest) condensed - they turn with their
+    sprocket as levels 1-2's chain inertia puts them on it - and the span rollers keep their
+    inertia: at xu2010's 600 Hz, ten times a span's first string mode, they do not follow their
+    static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every roller's inertia, 601.5 Hz
+    so, 568.4 Hz with none), and on a sagging chain the static secant is its sag's, which a span
+    above its string modes does not give. The mode returned is this model's mode with the
+    largest mass-weighted modal assurance criterion against the static one's shape (the same
+    mode, moved by the spans' inertia; Allemang & Brown, 1982). Condensing the seated rollers
+    also removes the local modes of a light sprocket rattling against its own rollers at kHz.
+    Checked against level 3's own ring-down on C1, xu2010 and unseen drives
+    (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
+    static stiffness is singular or no positive mode exists."""
+    n = 2 + 2 * model.M
+    P = model.P
+    q0 = solution.state[:n].astype(float)
+    v0 = np.zeros(n)
+    tau = float(solution.driver_angle)
+    ws = K.Workspace(model.M)
+    acc = np.zeros(n)
+    free = np.arange(1 if model.params["input_shaft.rigid"] else 0, n)
+    scale = np.ones(n)
+    scale[:2] = [max(P[K.I_R1], 1e-3), max(P[K.I_R2], 1e-3)]
+
+    def accelerations(q):
+        a, _, _ = accel(q, v0, tau, 0.0, 0.0, 0.0, P, ws, acc)
+        return a[free].copy()
+
+    accelerations(q0)
+    side = np.concatenate([[1, 2], np.repeat(ws.side[:model.M], 2)])[free]
+    A = np.empty((free.size, free.size))
+    for col, j in enumerate(free):
+        h = FD_STEP / scale[j]
+        qp, qm = q0.copy(), q0.copy()
+        qp[j] += h
+        qm[j] -= h
+        A[:, col] = (accelerations(qp) - accelerations(qm)) / (2.0 * h)
+    p = model.params
+    mass = np.concatenate([[p["driver.inertia"], p["driven.inertia"]],
+                           np.full(n - 2, p["chain.link_mass"])])[free]
+    k = -mass[:, None] * A
+    k = 0.5 * (k + k.T)
+    driven = np.flatnonzero(side == 2)
+    sprockets = np.flatnonzero(free < 2)
+    spans = np.flatnonzero(side == 0)
+    # the static condensation's driven-sprocket mode (the largest share of its kinetic energy
+    # in the driven sprocket and its seated rollers)
+    lam_s, phi_s = _condensed_modes(k, mass, sprockets)
+    energy = mass[:, None] * phi_s * phi_s
+    share_s = np.where(lam_s > 0.0, energy[driven].sum(axis=0) / energy.sum(axis=0), -1.0)
+    j = int(np.argmax(share_s))
+    if share_s[j] <= 0.0:
+        raise ValueError("level 3's static condensation has no positive driven-sprocket mode")
+    ref = phi_s[:, j]
+    # the span rollers' inertia kept: the mode that continues it (largest mass-weighted MAC
+    # with its shape; Allemang & Brown 1982)
+    lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
+    norm = np.einsum("ij,i,ij->j", phi, mass, phi)
+    mac = np.where(lam > 0.0, (phi.T @ (mass * ref)) ** 2 / (norm * (ref @ (mass * ref))), -1.0)
+    i = int(np.argmax(mac))
+    if mac[i] <= 0.0:
+        raise ValueError("level 3 linearised at rest has no positive mode in the driven sprocket")
+    e = mass * phi[:, i] ** 2
+    return LinearMode(math.sqrt(lam[i]), math.sqrt(lam_s[j]), float(e[driven].sum() / e.sum()),
+                      float(mac[i]))

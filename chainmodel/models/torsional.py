@@ -47,10 +47,10 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 
 from ..geometry import Drive
-from ..kinematics.wrapping import tooth_period_geometry
 from ..kernels import rk4_loop as L
 from ..kernels import spans as S
 from . import limits
+from .chain_inertia import reference_geometry, sprocket_mass_matrix
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_stiffness
 from .wrap_statics import span_ends, span_sag_terms, static_span_tension
@@ -100,41 +100,13 @@ class TorsionalModel(Model):
     # --- construction ----------------------------------------------------------------------
     @cached_property
     def reference(self) -> dict[str, float]:
-        """Tooth-period means of the level-0 configuration: link counts, span lengths and
-        directions (used for the constant chain-inertia matrix and the modal basis)."""
-        d = self.drive
-        g = tooth_period_geometry(d, 100)
-        return {"n_up": float(np.mean(g.upper_links)), "n_low": float(np.mean(g.lower_links)),
-                "n_up_min": float(np.min(g.upper_links)),
-                "n_low_min": float(np.min(g.lower_links)),
-                "wrapped_driver": float(np.mean(g.wrapped_driver)),
-                "wrapped_driven": float(np.mean(g.wrapped_driven)),
-                "l_up": float(np.mean(g.upper.length)), "l_low": float(np.mean(g.lower.length)),
-                "dir_up": float(np.mean(g.upper.direction)),
-                "dir_low": float(np.mean(g.lower.direction))}
+        """Tooth-period means of the level-0 configuration (chain_inertia.reference_geometry)."""
+        return reference_geometry(self.drive)
 
     def mass_matrix(self) -> np.ndarray:
-        """[[J11, J12], [J12, J22]] of the sprocket rotations [kg m^2] (module docstring).
-
-        Chain inertia (option ``torsional.chain_inertia``): the m_link of each roller seated on
-        a sprocket at its pitch radius; a span of n pitches has n - 1 inner rollers at k/n along
-        it, moving axially with the linear interpolation of its endpoints' chain speeds R w, so
-        sum (1 - k/n)^2 = (n - 1)(2n - 1) / (6n) to each end and sum k/n (1 - k/n)
-        = (n^2 - 1) / (6n) coupling the two (the lumped form of a bar's m/3, m/6 matrix). Link
-        counts are tooth-period means so the matrix is constant (no momentum jumps at events).
-        """
-        p, d = self.params, self.drive
-        j11, j22, j12 = p["driver.inertia"], p["driven.inertia"], 0.0
-        if p["torsional.chain_inertia"]:
-            r = self.reference
-            m = p["chain.link_mass"]
-            rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
-            ends = sum((n - 1) * (2 * n - 1) / (6 * n) for n in (r["n_up"], r["n_low"]))
-            cross = sum((n * n - 1) / (6 * n) for n in (r["n_up"], r["n_low"]))
-            j11 += m * rc * rc * (r["wrapped_driver"] + 1 + ends)
-            j22 += m * ro * ro * (r["wrapped_driven"] + 1 + ends)
-            j12 += m * rc * ro * cross
-        return np.array([[j11, j12], [j12, j22]])
+        """[[J11, J12], [J12, J22]] of the sprocket rotations [kg m^2], the chain's inertia
+        included (:func:`~chainmodel.models.chain_inertia.sprocket_mass_matrix`)."""
+        return sprocket_mass_matrix(self.drive, self.params, self.reference)
 
     def series_compliance(self) -> tuple[float, float]:
         """(extra compliance per span [m/N], extra free length per span [m]) from the seats

@@ -12,10 +12,17 @@ reaches zero, a^2 / |T_raw| below it. All three are fitted to the static equilib
 their clearance and flanks, gravity), condensed onto the driven sprocket's rotation (driver held
 at angle 0):
 
-* the driven sprocket's torsional stiffness K_3 = 2 dM / |phi2(+dM) - phi2(-dM)|, the secant
-  over a load step dM = ``LOAD_STEP`` T_0 R_o either way, and level 1's
-  R_o^2 sum_spans s_s / (n_s / k + c) = K_3 gives c (n_s the tooth-period-mean link counts
-  level 1 uses, s_s the floor's slope dT / dT_raw at rest);
+* the driven sprocket's torsional stiffness K_m at which levels 1-2's two-inertia system
+  (:func:`modal_stiffness`) rings at level 3's linear driven-sprocket mode
+  (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`: level 3 linearised at
+  rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept), and
+  level 1's R_o^2 sum_spans s_s / (n_s / k + c) = K_m gives c (n_s the tooth-period-mean link
+  counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Not the statics' secant
+  K_3 = 2 dM / |phi2(+dM) - phi2(-dM)| over a load step dM = ``LOAD_STEP`` T_0 R_o either way
+  (the static condensation, kept as ``WrapFit.stiffness``): above the spans' string modes
+  their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
+  xu2010) to a factor of 4 in stiffness (a sagging chain, whose static secant is its sag's);
+  docs/reduced_models.md, "One wrap: level 3 condensed at its mode";
 * the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
   at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
   driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
@@ -27,9 +34,9 @@ at angle 0):
   X, D without seats) give f.
 
 So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
-tension decay around the wrap included, level 1's driven-sprocket stiffness is level 3's
-condensed one and its loaded split at rest follows level 3's. Computed once per (drive,
-parameters): 3 + 4 x 5 static solves.
+tension decay around the wrap included, level 1's driven-sprocket mode is level 3's and its
+loaded split at rest follows level 3's. Computed once per (drive, parameters): 3 + 4 x 5
+static solves and one linearisation.
 """
 
 from __future__ import annotations
@@ -44,10 +51,11 @@ from .. import parameters as PRM
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 from . import span_sag as SG
+from .chain_inertia import sprocket_mass_matrix
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
-           "weighted", "span_sag_terms", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
+           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -73,8 +81,11 @@ class WrapFit:
     """Level 3's statics condensed for levels 0-2 (module docstring).
 
     compliance, free_length: per span end pair (c [m/N], f [m]) for spans.py's law;
-    static_tension: T_0 [N]; stiffness: K_3 [N m/rad] (driven sprocket, driver held);
-    upper, lower: the two span tensions at rest [N]; solves_wall: seconds spent."""
+    static_tension: T_0 [N]; stiffness: the statics' secant K_3 [N m/rad] (driven sprocket,
+    driver held); upper, lower: the two span tensions at rest [N]; solves_wall: seconds spent;
+    softness: the floor a [N]; loaded_slack: level 3's slack span it is fitted to [N];
+    modal_stiffness: K_m [N m/rad], the stiffness c is fitted to; mode: level 3's linear
+    driven-sprocket mode [Hz] (nan where none was found: K_m is then K_3)."""
     compliance: float
     free_length: float
     static_tension: float
@@ -84,6 +95,8 @@ class WrapFit:
     solves_wall: float
     softness: float = 0.0
     loaded_slack: float = float("nan")
+    modal_stiffness: float = float("nan")
+    mode: float = float("nan")
 
 
 def _key(drive: Drive, params: Mapping[str, Any]):
@@ -101,7 +114,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     # level 3 and its statics are imported when first needed: levels 0-2 import this module
     # and most of their runs never ask for them
     from .multibody import MultibodyModel
-    from .multibody_statics import solve_statics, static_state
+    from .multibody_statics import linear_driven_mode, solve_statics, static_state
     p3 = {k: v for k, v in params.items() if k in PRM.BY_NAME}
     model = MultibodyModel(drive, p3)
     rest = static_state(model)
@@ -146,19 +159,24 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         slack3 = float(np.mean(slacks))
     except ValueError:   # no loaded equilibrium found: no floor
         slack3 = None
+    try:
+        omega = linear_driven_mode(model, rest).omega
+        km = modal_stiffness(drive, p3, omega)
+    except ValueError:   # no mode to take (singular roller stiffness): the static secant
+        omega, km = float("nan"), k3
     b = 0.0
-    c = _compliance(k3 / (ro * ro), n_up, n_low, k, 1.0, 1.0)
+    c = _compliance(km / (ro * ro), n_up, n_low, k, 1.0, 1.0)
     for _ in range(4):
         t0_lin = _linear(t0, b)
         su, sl = _slope(t0_lin, b), _slope(t0_lin, b)
-        c = _compliance(k3 / (ro * ro), n_up, n_low, k, su, sl)
+        c = _compliance(km / (ro * ro), n_up, n_low, k, su, sl)
         if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, m_b / ro):
             break
         b = _softness(t0, slack3, c, n_up, n_low, k, m_b / ro)
     t0_lin = _linear(t0, b)
     f = 0.5 * (x - t0_lin * (links / k + 2.0 * c))
     fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
-                  float("nan") if slack3 is None else slack3)
+                  float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
     if len(_CACHE) > 256:
         _CACHE.clear()
     _CACHE[key] = fit
@@ -344,6 +362,29 @@ def _slope(raw, b):
     return 1.0 if b <= 0.0 else 0.5 * (1.0 + raw / math.sqrt(raw * raw + 4.0 * b * b))
 
 
+def modal_stiffness(drive: Drive, params: Mapping[str, Any], omega: float) -> float:
+    """K_m [N m/rad]: the driven sprocket's stiffness R_o^2 k at which levels 1-2's two-inertia
+    system (their sprocket mass matrix M, chain_inertia; the spans' stiffness k on the pitch
+    radii; the input shaft's spring k_s on the driver unless it is rigid) has a mode at
+    ``omega``. det(K - omega^2 M) = 0 is linear in k: with a = k_s - omega^2 M11,
+    b = -omega^2 M22, e = omega^2 M12, k = (e^2 - a b) / (R_c^2 b + R_o^2 a - 2 R_c R_o e);
+    rigid, k = omega^2 M22 / R_o^2. Raises ValueError where no positive k puts the driven
+    sprocket's mode there."""
+    m = sprocket_mass_matrix(drive, params)
+    rc, ro = drive.driver.pitch_radius, drive.driven.pitch_radius
+    w2 = omega * omega
+    if params["input_shaft.rigid"]:
+        k = w2 * m[1, 1] / (ro * ro)
+    else:
+        a = params["input_shaft.stiffness"] - w2 * m[0, 0]
+        b, e = -w2 * m[1, 1], w2 * m[0, 1]
+        k = (e * e - a * b) / (rc * rc * b + ro * ro * a - 2.0 * rc * ro * e)
+    if not k > 0.0:
+        raise ValueError(f"no span stiffness puts levels 1-2's driven mode at "
+                         f"level 3's {omega / (2 * math.pi):.4g} Hz")
+    return float(k * ro * ro)
+
+
 def _compliance(target, n_up, n_low, k, su, sl):
     """c with su / (n_up / k + c) + sl / (n_low / k + c) = target (span stiffness per R_o^2)."""
     # scipy.optimize imported with this module made an FMU's every fmi2Instantiate grow the
@@ -395,7 +436,7 @@ def _softness(t0, slack3, c, n_up, n_low, k, dt):
 def _loaded(model, rest, load):
     """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
     span's load step is small next to its distance from the straight layout)."""
-    from .multibody_statics import solve_statics, static_state
+    from .multibody_statics import linear_driven_mode, solve_statics, static_state
     try:
         return solve_statics(model, 0.0, load, start=rest.state)
     except ValueError:
