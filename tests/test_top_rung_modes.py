@@ -13,8 +13,8 @@ They show that the ring-down measures level 3's linear mode, that the secant sti
 level 3's statics (wrap_fit.stiffness) is the Guyan condensation, and what Guyan leaves out on
 xu2010: its spans' inertia, which at 600 Hz (ten times their first string mode) does not follow
 the static span shapes - why levels 1-2's wrap (``torsional.wrap_statics``) takes level 3's
-linear mode, not its statics, for its stiffness (docs/reduced_models.md, "One wrap: level 3
-condensed at its mode").
+linear mode, not its statics, for its stiffness (docs/reduced_models.md, "Item 3, the
+torsional mode: one wrap").
 """
 
 from __future__ import annotations

@@ -112,7 +112,7 @@ _C1_LEVEL2_AMPLITUDE = pytest.mark.xfail(strict=True, reason=(
     "the start's amplitude (25.39 / 24.22 Hz at 1 / 5 rpm, largely its seat clearance: 26.04 / "
     "25.65 Hz with a tenth of it), levels 1-2's linear wrap by about 1 %, and level 2 rings "
     "2.5 % above level 1 on the same wrap (its string modes), +5.4 % of level 3 at 5 rpm "
-    "(docs/reduced_models.md, 'One wrap: level 3 condensed at its mode')"))
+    "(docs/reduced_models.md, 'Item 3, the torsional mode: one wrap')"))
 
 
 @pytest.mark.parametrize("rpm", [1.0, 5.0])

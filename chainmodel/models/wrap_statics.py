@@ -22,7 +22,7 @@ at angle 0):
   (the static condensation, kept as ``WrapFit.stiffness``): above the spans' string modes
   their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
   xu2010) to a factor of 4 in stiffness (a sagging chain, whose static secant is its sag's);
-  docs/reduced_models.md, "One wrap: level 3 condensed at its mode";
+  docs/reduced_models.md, "Item 3, the torsional mode: one wrap";
 * the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
   at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
   driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
