@@ -1,0 +1,49 @@
+"""The driven sprocket's mode on drives the presets do not hold (issue 21 item 3,
+docs/reduced_models.md "Item 3, the torsional mode: one wrap"): the three example scenes and
+eight drives written by ``chainmodel new-scene`` (docs/scripts/unseen_drives/, some with no
+pretension, where the spans carry only their sag tension).
+
+Per drive: level 3 linearised at rest (wrap_fit.mode, multibody_statics.linear_driven_mode),
+the ring-down after a sudden start to 5 rpm (tests/ringdown_check.py's ``ring``, band
+0.6-1.4 x that mode) at level 3, at level 1 with ``torsional.wrap_statics`` and at level 1 by
+default, and K_m / K_3 (the wrap's modal stiffness over its statics' secant).
+
+    python docs/scripts/unseen_ringdown.py      # about 1-2 min with warm kernels
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from chainmodel.models.wrap_statics import wrap_fit
+from chainmodel.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests"))
+from ringdown_check import ring  # noqa: E402
+
+DRIVES = ([ROOT / "examples" / "scenes" / n for n in
+           ("12b_conveyor.toml", "16b_mixer.toml", "08b_fan_1500rpm.toml")]
+          + sorted((Path(__file__).resolve().parent / "unseen_drives").glob("*.toml")))
+ON = {"torsional_wrap_statics": True}
+
+
+def main():
+    print(f"{'drive':22s} {'T0 [N]':>7s} {'Km/K3':>6s} {'L3 lin.':>8s} {'L3 ring':>8s} "
+          f"{'L1 option':>16s} {'L1 default':>16s}")
+    for path in DRIVES:
+        sc = load_scene(str(path), fidelity=1, **ON)
+        fit = wrap_fit(sc.drive, sc.parameters)
+        band = (0.6 * fit.mode, 1.4 * fit.mode)
+        f3 = ring(str(path), 3, band)
+        cells = []
+        for kw in (ON, {}):
+            f = ring(str(path), 1, band, **kw)
+            cells.append(f"{f:8.2f} ({100 * (f / f3 - 1):+5.1f}%)")
+        print(f"{path.stem:22s} {fit.static_tension:7.1f} {fit.modal_stiffness / fit.stiffness:6.2f} "
+              f"{fit.mode:8.2f} {f3:8.2f} " + " ".join(cells), flush=True)
+
+
+if __name__ == "__main__":
+    main()
