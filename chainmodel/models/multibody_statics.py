@@ -47,7 +47,7 @@ from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 
-__all__ = ["StaticSolution", "solve_statics", "static_state", "LinearMode", "linear_driven_mode"]
+__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mode"]
 
 #: relative force tolerance (of the weight per roller) of a converged solution
 TOLERANCE = 1e-3
@@ -359,18 +359,6 @@ def static_state(model, driver_angle: float = 0.0, load: float = 0.0) -> StaticS
         return solve_statics(model, driver_angle, load)
 
 
-@dataclass(frozen=True)
-class LinearMode:
-    """Level 3's driven-sprocket mode about a static equilibrium (:func:`linear_driven_mode`):
-    omega [rad/s] with the span rollers' inertia, omega_static [rad/s] of the static (Guyan)
-    condensation onto the sprocket rotations, the mode's share of kinetic energy in the driven
-    sprocket and its seated rollers, and the MAC pairing the two."""
-    omega: float
-    omega_static: float
-    share: float
-    mac: float = float("nan")
-
-
 def _condensed_modes(k, mass, keep):
     """(omega^2 [n], shapes [full x n]) of the model with the coordinates not in ``keep``
     condensed statically (Guyan: they follow their static shapes, T = [I; -K_ss^-1 K_sk], and
@@ -390,23 +378,23 @@ def _condensed_modes(k, mass, keep):
     return lam, T @ vec
 
 
-def linear_driven_mode(model, solution: StaticSolution) -> LinearMode:
-    """Level 3's driven-sprocket mode about a static equilibrium ``solution`` (no load), small
-    amplitude, undamped.
+def linear_driven_mode(model, solution: StaticSolution) -> float:
+    """omega [rad/s] of level 3's driven-sprocket mode about a static equilibrium ``solution``
+    (no load), small amplitude, undamped.
 
     K = -diag(m) dA/dq, the accelerations A of the dynamic model's own force law differentiated
     by central differences in every position at zero velocity (the joint and link dampers act
     on velocities only), symmetrised; the input shaft held at the driver's angle, so with a
     rigid shaft the driver is held and otherwise it turns on the shaft's spring; masses the
     sprocket inertias and the link mass per roller (2 + 2 M unknowns, dense; milliseconds for
-    the presets' chains).
+    the presets' chains). Dense central differences rather than :class:`_Problem`'s coloured
+    Jacobian: that one holds the driver (no shaft row) and is one-sided.
 
     Which mode: first every roller condensed statically onto the sprocket rotations (Guyan:
     each roller follows its static shape, T = [I; -K_rr^-1 K_rs], and carries its mass
     through it); of its modes (two where the driver is free) the one with the largest share of
     its kinetic energy in the driven sprocket and its seated rollers. That is the static
-    wrap. Then
-    only the rollers seated on a sprocket (in contact at rest) condensed - they turn with their
+    wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they turn with their
     sprocket as levels 1-2's chain inertia puts them on it - and the span rollers keep their
     inertia: at xu2010's 600 Hz, ten times a span's first string mode, they do not follow their
     static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every roller's inertia, 601.5 Hz
@@ -467,6 +455,4 @@ def linear_driven_mode(model, solution: StaticSolution) -> LinearMode:
     i = int(np.argmax(mac))
     if mac[i] <= 0.0:
         raise ValueError("level 3 linearised at rest has no positive mode in the driven sprocket")
-    e = mass * phi[:, i] ** 2
-    return LinearMode(math.sqrt(lam[i]), math.sqrt(lam_s[j]), float(e[driven].sum() / e.sum()),
-                      float(mac[i]))
+    return math.sqrt(lam[i])

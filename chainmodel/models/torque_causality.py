@@ -235,13 +235,13 @@ class TorqueCausalModel(Model):
 
 def reflected_inertia_parts(model: Model) -> np.ndarray:
     """[J11, J12, J22] of the sprocket rotations [kg m^2]: level 1-2's mass matrix (chain
-    inertia included, TorsionalModel.mass_matrix); level 3 carries its chain as rollers, for
+    inertia included, chain_inertia.sprocket_mass_matrix); level 3 carries its chain as rollers, for
     which the same lumped matrix of a level-1 model with these parameters stands in."""
     if hasattr(model, "mass_matrix"):
         m = model.mass_matrix()
     else:
-        from .torsional import TorsionalModel
-        m = TorsionalModel(model.drive, dict(model.params, fidelity=1)).mass_matrix()
+        from .chain_inertia import sprocket_mass_matrix
+        m = sprocket_mass_matrix(model.drive, model.params)
     return np.array([m[0, 0], m[0, 1], m[1, 1]])
 
 

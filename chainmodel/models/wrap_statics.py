@@ -160,7 +160,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     except ValueError:   # no loaded equilibrium found: no floor
         slack3 = None
     try:
-        omega = linear_driven_mode(model, rest).omega
+        omega = linear_driven_mode(model, rest)
         km = modal_stiffness(drive, p3, omega)
     except ValueError:   # no mode to take (singular roller stiffness): the static secant
         omega, km = float("nan"), k3
