@@ -73,6 +73,10 @@ class ModalModel(TorsionalModel):
             params[name] = BY_NAME[name].check(params[name])
         self.n_modes = int(params["modal.modes"])
         super().__init__(drive, params)
+
+    def _complete_parameters(self) -> None:
+        """Refuse a chain without tension at rest, then fill the string modes' parameters."""
+        drive = self.drive
         t0 = self.static_tension()
         from .kinematic import loose_chain_error
         loose = loose_chain_error(drive, self.params)

@@ -53,7 +53,7 @@ from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_stiffness
-from .wrap_statics import span_ends, span_sag_terms, static_span_tension
+from .wrap_statics import span_ends, span_sag_terms, static_span_tension, unavailable
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -96,6 +96,8 @@ class TorsionalModel(Model):
         self._out_row = np.empty(len(OUTPUT_NAMES))
         self._dx_row = np.empty(self.n_states)
         self._aux_row = np.empty(S.A_SIZE)
+        self._complete_parameters()
+        self._fit_wrap_to_own_mode()
 
     # --- construction ----------------------------------------------------------------------
     @cached_property
@@ -120,6 +122,26 @@ class TorsionalModel(Model):
         """(compliance, free length, slack-span floor) of the span law, once per model."""
         return span_ends(self.drive, self.params, stretch=sum(self._sag_terms))
 
+    def _complete_parameters(self) -> None:
+        """What a level adds to the parameter vector before the wrap is fitted (level 2: its
+        string modes)."""
+
+    def _fit_wrap_to_own_mode(self) -> None:
+        """With ``torsional.wrap_statics``: refit the span ends so that this level's own
+        driven-sprocket mode at rest is level 3's (:mod:`.torsional_mode`)."""
+        if (self.drive.links is None or not self.params["torsional.wrap_statics"]
+                or unavailable(self.drive, self.params) is not None):
+            return
+        from .torsional_mode import fitted_ends
+        key = (self.level, self.n_modes, self.drive,
+               tuple(sorted((k, v) for k, v in self.params.items()
+                            if not k.startswith(("solver.", "output")))))
+        ends = fitted_ends(self, key)
+        if ends is None:
+            ends = self._span_ends
+        self.__dict__["_span_ends"] = ends
+        self._write_span_ends(self.P, ends)
+
     @cached_property
     def _sag_terms(self) -> tuple[float, float]:
         """(S_upper, S_lower) [N^2 m] the span law holds itself: here each straight span's
@@ -135,8 +157,6 @@ class TorsionalModel(Model):
         P[S.P_K_LINK] = p["chain.link_stiffness"]
         P[S.P_C_LINK] = p["chain.link_damping"]
         P[S.P_P_FREE] = d.pitch - p["chain.pretension"] / p["chain.link_stiffness"]
-        P[S.P_SEAT_C], P[S.P_SEAT_SLACK] = self.series_compliance()
-        P[S.P_SOFT] = self._span_ends[2]
         P[S.P_RIGID] = 1.0 if self.rigid else 0.0
         P[S.P_K_SHAFT] = p["input_shaft.stiffness"]
         P[S.P_C_SHAFT] = p["input_shaft.damping"]
@@ -151,18 +171,26 @@ class TorsionalModel(Model):
         P[S.P_PITCH] = d.pitch
         if p["torsional.mean_link_compliance"]:
             P[S.P_NBAR_U], P[S.P_NBAR_L] = self.reference["n_up"], self.reference["n_low"]
+        if self.n_modes == 0:
+            P[S.P_SAG_U], P[S.P_SAG_L] = self._sag_terms
+        self._write_span_ends(P, self._span_ends)
+        return P
+
+    def _write_span_ends(self, P: np.ndarray, ends: tuple[float, float, float]) -> None:
+        """Put the span law's ends (compliance, free length, floor) into ``P``, with what the
+        kernel takes from them: the constant span stiffness and damping of the mean link counts
+        and the sag law's root."""
+        P[S.P_SEAT_C], P[S.P_SEAT_SLACK], P[S.P_SOFT] = ends
+        if self.params["torsional.mean_link_compliance"]:
             # constant span stiffness and damping, computed once instead of per evaluation
             for nbar, keff, cn in ((S.P_NBAR_U, S.P_KEFF_U, S.P_CN_U),
                                    (S.P_NBAR_L, S.P_KEFF_L, S.P_CN_L)):
                 P[keff], P[cn] = S.span_stiffness(P[nbar], P[S.P_K_LINK], P[S.P_C_LINK],
                                                   P[S.P_SEAT_C])
-        if self.n_modes == 0:
-            P[S.P_SAG_U], P[S.P_SAG_L] = self._sag_terms
-            for sag, keff, root in ((S.P_SAG_U, S.P_KEFF_U, S.P_SAGC_U),
-                                    (S.P_SAG_L, S.P_KEFF_L, S.P_SAGC_L)):
-                if P[sag] > 0.0 and P[keff] > 0.0:
-                    P[root] = (P[sag] * P[keff]) ** (1.0 / 3.0)
-        return P
+        for sag, keff, root in ((S.P_SAG_U, S.P_KEFF_U, S.P_SAGC_U),
+                                (S.P_SAG_L, S.P_KEFF_L, S.P_SAGC_L)):
+            if P[sag] > 0.0 and P[keff] > 0.0:
+                P[root] = (P[sag] * P[keff]) ** (1.0 / 3.0)
 
     # --- state -----------------------------------------------------------------------------
     @property

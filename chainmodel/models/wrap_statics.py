@@ -17,7 +17,10 @@ at angle 0):
   (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`: level 3 linearised at
   rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept), and
   level 1's R_o^2 sum_spans s_s / (n_s / k + c) = K_m gives c (n_s the tooth-period-mean link
-  counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Not the statics' secant
+  counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Levels 1-2 then refit the
+  stiffness, floor and f with it, to their own linear mode at rest
+  (:mod:`chainmodel.models.torsional_mode`: level 2's string modes push the two-inertia
+  system's mode up, by 3 % on C1); K_m is where that fit starts. Not the statics' secant
   K_3 = 2 dM / |phi2(+dM) - phi2(-dM)| over a load step dM = ``LOAD_STEP`` T_0 R_o either way
   (the static condensation, kept as ``WrapFit.stiffness``): above the spans' string modes
   their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
@@ -80,7 +83,8 @@ _FAILED: dict = {}
 class WrapFit:
     """Level 3's statics condensed for levels 0-2 (module docstring).
 
-    compliance, free_length: per span end pair (c [m/N], f [m]) for spans.py's law;
+    compliance, free_length: per span end pair (c [m/N], f [m]) for spans.py's law on K_m
+    (levels 1-2 refit them to their own mode: :func:`span_ends` with ``stiffness``);
     static_tension: T_0 [N]; stiffness: the statics' secant K_3 [N m/rad] (driven sprocket,
     driver held); upper, lower: the two span tensions at rest [N]; solves_wall: seconds spent;
     softness: the floor a [N]; loaded_slack: level 3's slack span it is fitted to [N];
@@ -132,11 +136,6 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
             if share == 0.05 * LOAD_STEP:
                 raise
     k3 = 2.0 * dm / abs(minus.driven_angle - plus.driven_angle)
-    k = p3["chain.link_stiffness"]
-    g = tooth_period_geometry(drive, 100)
-    n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
-    excess, links = ST.rest_geometry(drive)
-    x = excess + links * p3["chain.pretension"] / k
     wall = rest.wall + plus.wall + minus.wall
     # the loaded split: level 3's slack span at a load that would take a linear law's slack
     # span to SLACK_SHARE of T_0
@@ -164,17 +163,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         km = modal_stiffness(drive, p3, omega)
     except ValueError:   # no mode to take (singular roller stiffness): the static secant
         omega, km = float("nan"), k3
-    b = 0.0
-    c = _compliance(km / (ro * ro), n_up, n_low, k, 1.0, 1.0)
-    for _ in range(4):
-        t0_lin = _linear(t0, b)
-        su, sl = _slope(t0_lin, b), _slope(t0_lin, b)
-        c = _compliance(km / (ro * ro), n_up, n_low, k, su, sl)
-        if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, m_b / ro):
-            break
-        b = _softness(t0, slack3, c, n_up, n_low, k, m_b / ro)
-    t0_lin = _linear(t0, b)
-    f = 0.5 * (x - t0_lin * (links / k + 2.0 * c))
+    c, f, b = _ends(drive, p3, t0, slack3, km)
     fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
     if len(_CACHE) > 256:
@@ -183,8 +172,35 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     return fit
 
 
-def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0
-              ) -> tuple[float, float, float]:
+def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
+          stiffness: float) -> tuple[float, float, float]:
+    """(c, f, a) of the span law at rest: c with which level 1's law stiffens the driven
+    sprocket by ``stiffness`` [N m/rad], a with which its slack span under the load M_a is
+    level 3's ``slack3`` (None: no floor), f with which it holds T_0 at rest (module
+    docstring; the floor's slope and c fixed in turn, four passes)."""
+    ro = drive.driven.pitch_radius
+    k = params["chain.link_stiffness"]
+    g = tooth_period_geometry(drive, 100)
+    n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
+    excess, links = ST.rest_geometry(drive)
+    x = excess + links * params["chain.pretension"] / k
+    dt = (1.0 - SLACK_SHARE) * 2.0 * t0
+    target = stiffness / (ro * ro)
+    b = 0.0
+    c = _compliance(target, n_up, n_low, k, 1.0, 1.0)
+    for _ in range(4):
+        t0_lin = _linear(t0, b)
+        s = _slope(t0_lin, b)
+        c = _compliance(target, n_up, n_low, k, s, s)
+        if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, dt):
+            break
+        b = _softness(t0, slack3, c, n_up, n_low, k, dt)
+    t0_lin = _linear(t0, b)
+    return c, 0.5 * (x - t0_lin * (links / k + 2.0 * c)), b
+
+
+def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
+              stiffness: float | None = None) -> tuple[float, float, float]:
     """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
     :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count); else - or
     where level 3 has no static equilibrium - the seat ladder's compliance
@@ -194,15 +210,23 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0
     ``stretch`` [N^2 m] is the sag term the level's own span law adds at rest (level 2's
     string modes: :func:`~chainmodel.models.span_sag.sag_term` with its mode count; 0 at levels
     0-1): the ends give that stretch away again, 2 f grows by stretch / T_0^2, so the level
-    holds the static tension at rest once and not the sag twice."""
+    holds the static tension at rest once and not the sag twice.
+
+    ``stiffness`` [N m/rad], with ``torsional.wrap_statics``: fit c (and the floor and f with
+    it) to this driven-sprocket stiffness instead of :func:`wrap_fit`'s K_m (levels 1-2 fit it
+    on their own linearised mode: :mod:`chainmodel.models.torsional_mode`)."""
     if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
         try:
             fit = wrap_fit(drive, params)
-            _FAILED.pop(_key(drive, params), None)
-            return (fit.compliance, fit.free_length + _given_back(stretch, fit.static_tension),
-                    fit.softness)
         except ValueError as exc:    # reported by unavailable() (chainmodel.validity)
             _FAILED[_key(drive, params)] = str(exc)
+        else:
+            _FAILED.pop(_key(drive, params), None)
+            c, f, a = fit.compliance, fit.free_length, fit.softness
+            if stiffness is not None:      # a ValueError here is the caller's (its trial)
+                slack3 = None if math.isnan(fit.loaded_slack) else fit.loaded_slack
+                c, f, a = _ends(drive, params, fit.static_tension, slack3, stiffness)
+            return c, f + _given_back(stretch, fit.static_tension), a
     c, f = ST.seat_series_compliance(params, drive)
     if drive is None or drive.links is None or params["gravity"] == 0.0:
         return c, f, 0.0

@@ -1,0 +1,143 @@
+"""Levels 1-2's driven-sprocket mode linearised at rest, and the wrap stiffness fitted on it
+(``torsional.wrap_statics``; issue 21 item 3, docs/reduced_models.md "Item 3, the torsional
+mode: one wrap").
+
+:func:`~chainmodel.models.wrap_statics.wrap_fit` finds K_m, the driven sprocket's stiffness at
+which levels 1-2's two-inertia system (their sprocket mass matrix, the spans on the pitch radii,
+the shaft's spring) rings at level 3's linear driven-sprocket mode omega_3. The levels are not
+that two-inertia system:
+
+* level 1's spans pull at the driver's angle 0 with their own lengths and moment arms (not the
+  pitch radii), through the floor's slope;
+* level 2's string modes couple to the rotation through their sag. Below the torsional mode
+  (C1: 17.5 and 19 Hz against 25 Hz) they push it up: +4 % on K_m, measured.
+
+Level 3's own linearisation holds its span rollers' transverse inertia, so a level with string
+modes of its own counts them twice on K_m. Each level therefore fits the stiffness to its own
+linearisation, K_{j+1} = K_j (omega_3 / omega_j)^2 from K_0 = K_m until omega_j is omega_3 within
+``TOLERANCE``: omega_j the level's mode at rest (driver at angle 0, input held, no load, as level
+3's) from central differences of its own right-hand side. The mode is the one with the largest
+mass-weighted MAC (Allemang & Brown 1982) against the two-inertia system's mode at K_m, the
+string coordinates counted in the norm with their modal mass rho L / 2 (a sine mode's), so a
+string mode never passes for the rotation's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .base import Inputs
+
+__all__ = ["linear_positions", "driven_mode", "fitted_ends", "TOLERANCE"]
+
+#: the fitted mode's relative distance from level 3's at which the iteration stops
+TOLERANCE = 1e-5
+#: iterations before the fit keeps K_m (the two-inertia fit)
+MAX_ITERATIONS = 12
+
+_CACHE: dict = {}
+
+
+def linear_positions(model, x: np.ndarray, u: Inputs, h: float = 1e-6
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(indices of the position states, -d(accelerations)/d(positions) at ``x``): central
+    differences of ``model.rhs``, each position stepped by ``h`` times its state scale. Levels
+    1-2's layout: sprocket angles, sprocket speeds, then [q_up, q_low, v_up, v_low] of the
+    string modes (at rest dq/dt = v, so dv/dt is the modal acceleration)."""
+    ns, nm = model.n_sprocket_states, model.n_modes
+    pos = list(range(ns // 2)) + list(range(ns, ns + 2 * nm))
+    acc = list(range(ns // 2, ns)) + list(range(ns + 2 * nm, ns + 4 * nm))
+    scale = model.state_scale()
+    a = np.empty((len(pos), len(pos)))
+    for j, i in enumerate(pos):
+        step = h * scale[i]
+        up, down = x.copy(), x.copy()
+        up[i] += step
+        down[i] -= step
+        a[:, j] = -(model.rhs(0.0, up, u)[acc] - model.rhs(0.0, down, u)[acc]) / (2.0 * step)
+    return np.array(pos), a
+
+
+def _mass_diagonal(model) -> np.ndarray:
+    """The positions' mass for the MAC: the sprocket mass matrix, each string mode rho L / 2."""
+    m = model.mass_matrix()
+    sprockets = m[1:, 1:] if model.rigid else m
+    rho = model.params["chain.link_mass"] / model.drive.pitch
+    strings = ([0.5 * rho * model.reference["l_up"]] * model.n_modes
+               + [0.5 * rho * model.reference["l_low"]] * model.n_modes)
+    n = sprockets.shape[0] + len(strings)
+    full = np.zeros((n, n))
+    full[:sprockets.shape[0], :sprockets.shape[0]] = sprockets
+    full[sprockets.shape[0]:, sprockets.shape[0]:] = np.diag(strings)
+    return full
+
+
+def _two_inertia_shape(model, stiffness: float, omega: float) -> np.ndarray:
+    """The sprocket rotations of the two-inertia system with the driven sprocket's stiffness
+    ``stiffness`` in the mode nearest ``omega`` (wrap_statics.modal_stiffness's system)."""
+    if model.rigid:
+        return np.array([1.0])
+    d, p = model.drive, model.params
+    rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
+    k = stiffness / (ro * ro)
+    kk = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
+    kk[0, 0] += p["input_shaft.stiffness"]
+    w2, v = np.linalg.eig(np.linalg.solve(model.mass_matrix(), kk))
+    return v[:, int(np.argmin(np.abs(w2.real - omega * omega)))].real
+
+
+def driven_mode(model, shape: np.ndarray) -> float:
+    """The level's driven-sprocket mode at rest [rad/s] (module docstring): the linear mode
+    with the largest mass-weighted MAC against the sprocket rotations ``shape``."""
+    u = Inputs()
+    x = model.initial_state(u)
+    _, a = linear_positions(model, x, u)
+    w2, vecs = np.linalg.eig(a)
+    mass = _mass_diagonal(model)
+    ref = np.zeros(len(a))
+    ref[:len(shape)] = shape
+    best, mac = -1, -1.0
+    for i in range(len(w2)):
+        v = vecs[:, i].real
+        m = (v @ mass @ ref) ** 2 / ((v @ mass @ v) * (ref @ mass @ ref))
+        if w2[i].real > 0.0 and m > mac:
+            best, mac = i, m
+    if best < 0:
+        raise ValueError("no linear mode with a positive stiffness at rest")
+    return math.sqrt(w2[best].real)
+
+
+def fitted_ends(model, key) -> tuple[float, float, float] | None:
+    """The span ends (c, f, a) at which ``model``'s own driven-sprocket mode is level 3's
+    (module docstring), written into ``model.P`` as it goes; cached per ``key``. None where
+    level 3 had no linear mode (wrap_fit then used the static secant) or the iteration does not
+    converge: the model keeps :func:`~chainmodel.models.wrap_statics.wrap_fit`'s ends (the
+    two-inertia fit)."""
+    from .wrap_statics import span_ends, wrap_fit
+    if key in _CACHE:
+        return _CACHE[key]
+    fit = wrap_fit(model.drive, model.params)
+    result = None
+    if math.isfinite(fit.mode):
+        omega3 = 2.0 * math.pi * fit.mode
+        shape = _two_inertia_shape(model, fit.modal_stiffness, omega3)
+        stiffness = fit.modal_stiffness
+        stretch = sum(model._sag_terms)
+        for _ in range(MAX_ITERATIONS):
+            try:
+                ends = span_ends(model.drive, model.params, stretch=stretch,
+                                 stiffness=stiffness)
+                model._write_span_ends(model.P, ends)
+                omega = driven_mode(model, shape)
+            except ValueError:      # no end compliance or no mode for this stiffness
+                break
+            if abs(omega / omega3 - 1.0) < TOLERANCE:
+                result = ends
+                break
+            stiffness *= (omega3 / omega) ** 2
+    if len(_CACHE) > 256:
+        _CACHE.clear()
+    _CACHE[key] = result
+    return result
