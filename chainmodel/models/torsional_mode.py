@@ -60,7 +60,7 @@ def linear_positions(model, x: np.ndarray, u: Inputs, h: float = 1e-6
     return np.array(pos), a
 
 
-def _mass_diagonal(model) -> np.ndarray:
+def _position_mass(model) -> np.ndarray:
     """The positions' mass for the MAC: the sprocket mass matrix, each string mode rho L / 2."""
     m = model.mass_matrix()
     sprockets = m[1:, 1:] if model.rigid else m
@@ -95,7 +95,7 @@ def driven_mode(model, shape: np.ndarray) -> float:
     x = model.initial_state(u)
     _, a = linear_positions(model, x, u)
     w2, vecs = np.linalg.eig(a)
-    mass = _mass_diagonal(model)
+    mass = _position_mass(model)
     ref = np.zeros(len(a))
     ref[:len(shape)] = shape
     best, mac = -1, -1.0
