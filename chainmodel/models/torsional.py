@@ -133,10 +133,7 @@ class TorsionalModel(Model):
                 or unavailable(self.drive, self.params) is not None):
             return
         from .torsional_mode import fitted_ends
-        key = (self.level, self.n_modes, self.drive,
-               tuple(sorted((k, v) for k, v in self.params.items()
-                            if not k.startswith(("solver.", "output")))))
-        ends = fitted_ends(self, key)
+        ends = fitted_ends(self)
         if ends is None:
             ends = self._span_ends
         self.__dict__["_span_ends"] = ends
@@ -363,13 +360,17 @@ class TorsionalModel(Model):
     def stiffness_bound(self) -> np.ndarray:
         """Linear stiffness matrix of the sprocket rotations with both spans taut, their
         shortest link counts and arms equal to the pitch radii (an upper bound for stable_step)."""
-        p, d, r = self.params, self.drive, self.reference
+        p, r = self.params, self.reference
         c, _ = self.series_compliance()
-        rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
-        k = sum(1.0 / (max(n, 1.0) / p["chain.link_stiffness"] + c)
-                for n in (r["n_up_min"], r["n_low_min"]))
+        return self.two_inertia_stiffness(sum(1.0 / (max(n, 1.0) / p["chain.link_stiffness"] + c)
+                                              for n in (r["n_up_min"], r["n_low_min"])))
+
+    def two_inertia_stiffness(self, k: float) -> np.ndarray:
+        """Stiffness matrix [N m/rad] of the sprocket rotations on spans of total stiffness
+        ``k`` [N/m] pulling at the pitch radii, the input shaft's spring on the driver."""
+        rc, ro = self.drive.driver.pitch_radius, self.drive.driven.pitch_radius
         K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
-        K[0, 0] += p["input_shaft.stiffness"]
+        K[0, 0] += self.params["input_shaft.stiffness"]
         return K
 
     def sprocket_frequencies(self) -> np.ndarray:

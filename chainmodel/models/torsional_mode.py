@@ -79,11 +79,7 @@ def _two_inertia_shape(model, stiffness: float, omega: float) -> np.ndarray:
     ``stiffness`` in the mode nearest ``omega`` (wrap_statics.modal_stiffness's system)."""
     if model.rigid:
         return np.array([1.0])
-    d, p = model.drive, model.params
-    rc, ro = d.driver.pitch_radius, d.driven.pitch_radius
-    k = stiffness / (ro * ro)
-    kk = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
-    kk[0, 0] += p["input_shaft.stiffness"]
+    kk = model.two_inertia_stiffness(stiffness / model.drive.driven.pitch_radius ** 2)
     w2, v = np.linalg.eig(np.linalg.solve(model.mass_matrix(), kk))
     return v[:, int(np.argmin(np.abs(w2.real - omega * omega)))].real
 
@@ -109,13 +105,16 @@ def driven_mode(model, shape: np.ndarray) -> float:
     return math.sqrt(w2[best].real)
 
 
-def fitted_ends(model, key) -> tuple[float, float, float] | None:
+def fitted_ends(model) -> tuple[float, float, float] | None:
     """The span ends (c, f, a) at which ``model``'s own driven-sprocket mode is level 3's
-    (module docstring), written into ``model.P`` as it goes; cached per ``key``. None where
+    (module docstring), written into ``model.P`` as it goes; cached per level, mode count,
+    drive and parameters (the level's options included, unlike wrap_fit's). None where
     level 3 had no linear mode (wrap_fit then used the static secant) or the iteration does not
     converge: the model keeps :func:`~chainmodel.models.wrap_statics.wrap_fit`'s ends (the
     two-inertia fit)."""
-    from .wrap_statics import span_ends, wrap_fit
+    from .wrap_statics import parameters_key, span_ends, wrap_fit
+    key = (model.level, model.n_modes) + parameters_key(model.drive, model.params,
+                                                        skip=("solver.", "output"))
     if key in _CACHE:
         return _CACHE[key]
     fit = wrap_fit(model.drive, model.params)

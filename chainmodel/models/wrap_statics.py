@@ -58,7 +58,7 @@ from .chain_inertia import sprocket_mass_matrix
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
-           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable"]
+           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "parameters_key"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -103,15 +103,17 @@ class WrapFit:
     mode: float = float("nan")
 
 
-def _key(drive: Drive, params: Mapping[str, Any]):
-    return (drive, tuple(sorted((k, v) for k, v in params.items()
-                                if not k.startswith(("solver.", "output", "torsional.",
-                                                     "modal.")))))
+def parameters_key(drive: Drive, params: Mapping[str, Any],
+                   skip: tuple[str, ...] = ("solver.", "output", "torsional.", "modal.")):
+    """A cache key of the drive and the parameters whose names do not start with ``skip``
+    (by default those level 3's statics do not read)."""
+    return (drive, tuple(sorted((k, v) for k, v in params.items() if not k.startswith(skip))))
+
 
 
 def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     """(c, f, T_0, K_3, ...) of this drive and parameters (module docstring); cached."""
-    key = _key(drive, params)
+    key = parameters_key(drive, params)
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -219,9 +221,9 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
         try:
             fit = wrap_fit(drive, params)
         except ValueError as exc:    # reported by unavailable() (chainmodel.validity)
-            _FAILED[_key(drive, params)] = str(exc)
+            _FAILED[parameters_key(drive, params)] = str(exc)
         else:
-            _FAILED.pop(_key(drive, params), None)
+            _FAILED.pop(parameters_key(drive, params), None)
             c, f, a = fit.compliance, fit.free_length, fit.softness
             if stiffness is not None:      # a ValueError here is the caller's (its trial)
                 slack3 = None if math.isnan(fit.loaded_slack) else fit.loaded_slack
@@ -328,14 +330,14 @@ def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
     ends with the seat ladder. chainmodel.validity turns it into a warning."""
     if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
         return None
-    return _FAILED.get(_key(drive, params))
+    return _FAILED.get(parameters_key(drive, params))
 
 
 def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     """Level 3's static span tension [N] of this drive at rest, no load (its static
     equilibrium, gravity included: :func:`~chainmodel.models.multibody_statics.static_state`),
     or None where the statics find no equilibrium; cached per drive and parameters."""
-    key = ("sag",) + _key(drive, params)
+    key = ("sag",) + parameters_key(drive, params)
     if key not in _CACHE:
         from .multibody import MultibodyModel          # when first needed (see wrap_fit)
         from .multibody_statics import static_state
