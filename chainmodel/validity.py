@@ -100,7 +100,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "teeth_skipped": "teeth skipped",
           "driven_reversal": "driven sprocket reversing under forward drive",
           "damper_losses": "level 3's dampers dissipate more than joint friction would",
-          "wrap_statics_unavailable": "torsional.wrap_statics not honoured"}
+          "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
+          "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -110,19 +111,25 @@ def chain_play(drive: Drive, params: Mapping[str, Any]) -> float:
     return (drive.links or 0) * float(params.get("chain.joint_clearance", 0.0))
 
 
-def geometry_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
+def geometry_problems(drive: Drive, params: Mapping[str, Any],
+                      level: int | None = None) -> list[Problem]:
     """The chain too long or too short for its centre distance by more than its play (module
-    docstring), and an option the model could not honour (``torsional.wrap_statics``)."""
+    docstring), and an option the model could not honour, or honoured on a weaker fit
+    (``torsional.wrap_statics``; with ``level``, that level's own fit too)."""
     if drive.links is None:
         return []
-    return _length_problems(drive, params) + _wrap_statics_problems(drive, params)
+    return _length_problems(drive, params) + _wrap_statics_problems(drive, params, level)
 
 
-def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
-    from .models.wrap_statics import unavailable
+def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
+                           level: int | None) -> list[Problem]:
+    from .models.wrap_statics import fallbacks, unavailable
+    if not params.get("torsional.wrap_statics"):
+        return []
     why = unavailable(drive, params)
     if why is None:
-        return []
+        return [Problem("wrap_statics_fallback", f"torsional.wrap_statics: {note}")
+                for note in fallbacks(drive, params, level)]
     return [Problem("wrap_statics_unavailable", (
         f"torsional.wrap_statics = true was not honoured: level 3's statics of this drive found "
         f"no equilibrium ({why}), so levels 0-2 hold their span ends with the seat ladder "
@@ -471,7 +478,7 @@ def problems(drive: Drive, params: Mapping[str, Any], level: int, time=None,
              outputs: Mapping[str, np.ndarray] | None = None, input_speed=None,
              load_torque=0.0) -> list[Problem]:
     """Geometry checks, then the output checks if ``outputs`` are given."""
-    found = geometry_problems(drive, params)
+    found = geometry_problems(drive, params, level)
     if outputs is not None:
         found += output_problems(drive, params, level, time, outputs, input_speed, load_torque)
     return found

@@ -425,7 +425,8 @@ class ChainDrive(Fmi2Slave):
         self._stale = False
         self._initialized = True
         self._check_validity(st.t, row, u.speed, u.torque,
-                             self._validity.geometry_problems(st.model.drive, self._model_params))
+                             self._validity.geometry_problems(st.model.drive, self._model_params,
+                                                              st.model.level))
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
               if d.startswith(self._M.base.QUASI_STATIC)]

@@ -251,3 +251,51 @@ def test_an_option_that_could_not_be_honoured_is_reported(monkeypatch):
     r = chainmodel.simulate(load_scene("xu2010", fidelity=1, **ON), duration=0.05,
                             output_interval=1e-3)
     assert not any("torsional.wrap_statics" in w for w in r.warnings)
+
+
+def test_a_weaker_fit_is_reported(monkeypatch):
+    """The option's two fallbacks each give a warning naming what was used instead: level 3
+    without a linear mode (the wrap takes its statics' secant K_3) and a level whose own mode
+    cannot be fitted (its ends stay on K_m); level 0, which takes only T_0, does not warn, and
+    neither does a fit that worked."""
+    from chainmodel.models import multibody_statics as MS
+    from chainmodel.models import torsional_mode as TM
+    from chainmodel.models import wrap_statics as W
+
+    def fresh_caches():
+        for module, name in ((W, "_CACHE"), (W, "_FELL_BACK"), (TM, "_CACHE")):
+            monkeypatch.setattr(module, name, {})
+
+    def no_mode(model, rest):
+        raise ValueError("singular roller stiffness (forced by the test)")
+
+    def notes(result, text):
+        return [w for w in result.warnings if "torsional.wrap_statics" in w and text in w]
+
+    fresh_caches()
+    monkeypatch.setattr(MS, "linear_driven_mode", no_mode)
+    sc = load_scene("xu2010", fidelity=1, **ON)
+    r = chainmodel.simulate(sc, duration=0.05, output_interval=1e-3)
+    fit = wrap_fit(sc.drive, sc.parameters)
+    assert math.isnan(fit.mode) and fit.modal_stiffness == fit.stiffness
+    found = notes(r, "secant K_3")
+    assert len(found) == 1 and "forced by the test" in found[0]
+    r0 = chainmodel.simulate(load_scene("xu2010", fidelity=0, **ON), duration=0.05,
+                             output_interval=1e-3)
+    assert not notes(r0, "")
+
+    monkeypatch.undo()
+    fresh_caches()
+    monkeypatch.setattr(TM, "MAX_ITERATIONS", 1)    # K_m alone is 3 % off on C1 at level 2
+    sc = load_scene("C1", fidelity=2, **ON)
+    r = chainmodel.simulate(sc, duration=0.05, output_interval=1e-3)
+    found = notes(r, "could not be fitted")
+    assert len(found) == 1 and "did not converge in 1 passes" in found[0]
+    model = chainmodel.models.ModalModel(sc.drive, sc.parameters)
+    assert model.series_compliance()[0] == wrap_fit(sc.drive, sc.parameters).compliance
+
+    monkeypatch.undo()
+    fresh_caches()
+    r = chainmodel.simulate(load_scene("C1", fidelity=2, **ON), duration=0.05,
+                            output_interval=1e-3)
+    assert not notes(r, "")

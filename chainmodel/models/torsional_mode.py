@@ -111,31 +111,40 @@ def fitted_ends(model) -> tuple[float, float, float] | None:
     drive and parameters (the level's options included, unlike wrap_fit's). None where
     level 3 had no linear mode (wrap_fit then used the static secant) or the iteration does not
     converge: the model keeps :func:`~chainmodel.models.wrap_statics.wrap_fit`'s ends (the
-    two-inertia fit)."""
-    from .wrap_statics import parameters_key, span_ends, wrap_fit
+    two-inertia fit), and :func:`~chainmodel.models.wrap_statics.fallbacks` says why."""
+    from .wrap_statics import note_fallback, parameters_key, span_ends, wrap_fit
     key = (model.level, model.n_modes) + parameters_key(model.drive, model.params,
                                                         skip=("solver.", "output"))
     if key in _CACHE:
         return _CACHE[key]
     fit = wrap_fit(model.drive, model.params)
-    result = None
+    result, why = None, None
     if math.isfinite(fit.mode):
         omega3 = 2.0 * math.pi * fit.mode
         shape = _two_inertia_shape(model, fit.modal_stiffness, omega3)
         stiffness = fit.modal_stiffness
         stretch = sum(model._sag_terms)
+        why = f"it did not converge in {MAX_ITERATIONS} passes"
         for _ in range(MAX_ITERATIONS):
             try:
                 ends = span_ends(model.drive, model.params, stretch=stretch,
                                  stiffness=stiffness)
                 model._write_span_ends(model.P, ends)
                 omega = driven_mode(model, shape)
-            except ValueError:      # no end compliance or no mode for this stiffness
+            except ValueError as exc:   # no end compliance or no mode for this stiffness
+                why = f"at {stiffness:.4g} N m/rad: {exc}"
                 break
             if abs(omega / omega3 - 1.0) < TOLERANCE:
-                result = ends
+                result, why = ends, None
                 break
             stiffness *= (omega3 / omega) ** 2
+        if why is not None:
+            why = (f"level {model.level}'s own driven-sprocket mode at rest could not be fitted "
+                   f"to level 3's {fit.mode:.4g} Hz ({why}), so its span ends stay on the "
+                   f"two-inertia fit K_m = {fit.modal_stiffness:.4g} N m/rad (its torsional "
+                   f"mode then off level 3's by the two-inertia system's error, +3 % on C1 at "
+                   f"level 2; docs/reduced_models.md)")
+    note_fallback(model.level, model.drive, model.params, why)
     if len(_CACHE) > 256:
         _CACHE.clear()
     _CACHE[key] = result

@@ -58,7 +58,8 @@ from .chain_inertia import sprocket_mass_matrix
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
-           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "parameters_key"]
+           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "fallbacks",
+           "note_fallback", "parameters_key"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -77,6 +78,11 @@ SAG_RATIO = 2.0
 _CACHE: dict = {}
 #: why the fit failed, per (drive, parameters) key (:func:`unavailable`)
 _FAILED: dict = {}
+#: where the fit fell back to a weaker stiffness, per (level or None, drive, parameters) key
+#: (:func:`fallbacks`)
+_FELL_BACK: dict = {}
+#: what a level's own fit does not read (its options and string modes it does)
+_OWN_SKIP = ("solver.", "output")
 
 
 @dataclass(frozen=True)
@@ -163,8 +169,15 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     try:
         omega = linear_driven_mode(model, rest)
         km = modal_stiffness(drive, p3, omega)
-    except ValueError:   # no mode to take (singular roller stiffness): the static secant
+    except ValueError as exc:   # no mode to take (singular roller stiffness): the secant
         omega, km = float("nan"), k3
+        _FELL_BACK[(None,) + key] = (
+            f"level 3's linear driven-sprocket mode was not found ({exc}), so levels 1-2 take "
+            f"the wrap stiffness from its statics' secant K_3 = {k3:.4g} N m/rad, which is "
+            f"stiffer than the mode's (their torsional mode about +5 % on C1 and xu2010, up to "
+            f"2x on a sagging chain); run level 3 where the torsional mode matters")
+    else:
+        _FELL_BACK.pop((None,) + key, None)
     c, f, b = _ends(drive, p3, t0, slack3, km)
     fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
@@ -322,6 +335,32 @@ def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | Non
         # polygon, seat flanks: docs/reduced_models.md "Not yet one quantity")
         return None
     return s3
+
+
+def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None) -> list[str]:
+    """Where ``torsional.wrap_statics`` was honoured at levels 1-2 on a weaker fit than its
+    own (sentences, empty if none): level 3 had no linear mode (:func:`wrap_fit` took the static secant K_3),
+    or the model of ``level`` could not be fitted to it (:mod:`chainmodel.models.
+    torsional_mode`: the ends stay on K_m). chainmodel.validity turns each into a warning."""
+    if level in (0, 3):     # level 0 takes only T_0 from the fit, level 3 its own statics
+        return []
+    key = (None,) + parameters_key(drive, params)
+    found = [_FELL_BACK[key]] if key in _FELL_BACK else []
+    own = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
+    if level is not None and own in _FELL_BACK:
+        found.append(_FELL_BACK[own])
+    return found
+
+
+def note_fallback(level: int, drive: Drive, params: Mapping[str, Any],
+                  why: str | None) -> None:
+    """Record (``why``) or clear (None) the fallback of ``level`` 's own fit for
+    :func:`fallbacks`."""
+    key = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
+    if why is None:
+        _FELL_BACK.pop(key, None)
+    else:
+        _FELL_BACK[key] = why
 
 
 def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
