@@ -41,7 +41,7 @@ import numpy as np
 from ..geometry import Drive
 from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
-from .span_sag import sag_term
+from .span_sag import span_terms
 from .torsional import TorsionalModel
 
 __all__ = ["ModalModel", "galerkin_coefficients"]
@@ -97,12 +97,12 @@ class ModalModel(TorsionalModel):
 
     @cached_property
     def _sag_terms(self) -> tuple[float, float]:
-        """The string modes' sag under gravity stretches the spans by S_N / T^2 at rest (S_N
-        the modal sum of the elastic catenary's sag term, :func:`~chainmodel.models.span_sag.
-        sag_term`): the span law's ends give it away again, so the static tension is held once
-        (wrap_statics.span_ends). Returned whole as the upper span's share (only the sum is
-        used: the kernel's straight-span sag is level 1's)."""
-        return sag_term(self.drive, self.params, modes=self.n_modes), 0.0
+        """The string modes' sag under gravity stretches each span by S_N / T^2 (S_N the modal
+        sum of the elastic catenary's sag term, :func:`~chainmodel.models.span_sag.
+        span_terms`): at rest the span law's ends give it away again, so the static tension is
+        held once (wrap_statics.span_ends), and with torsional.wrap_statics the slack span's
+        floor is fitted with it (the kernel's straight-span sag is level 1's: not written)."""
+        return span_terms(self.drive, self.params, modes=self.n_modes)
 
     def _fill_modal_parameters(self, t0: float) -> None:
         p, d, r, P = self.params, self.drive, self.reference, self.P

@@ -32,7 +32,7 @@ import numpy as np
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
-__all__ = ["sag_term", "tension", "normal_weights", "deep", "SHALLOW"]
+__all__ = ["sag_term", "span_terms", "tension", "normal_weights", "deep", "SHALLOW"]
 
 #: the largest sag-to-chord ratio w_n L / (8 T) for which the shallow parabola is the span's
 #: shape (Irvine 1981, ch. 2: a flat-sag cable to about 1:8; here held to 1:10)
@@ -56,12 +56,19 @@ def normal_weights(drive: Drive, params: Mapping[str, Any]) -> tuple[tuple[float
 def sag_term(drive: Drive, params: Mapping[str, Any], modes: int | None = None) -> float:
     """S [N^2 m] of the module docstring: sum over spans of w_n^2 L^3 / 24, or with ``modes``
     the part N string modes hold, sum w_n^2 L^3 (4 / pi^4) sum_{odd m <= N} m^-4."""
+    return sum(span_terms(drive, params, modes))
+
+
+def span_terms(drive: Drive, params: Mapping[str, Any],
+               modes: int | None = None) -> tuple[float, float]:
+    """(S_upper, S_lower) [N^2 m]: :func:`sag_term` per span; (0, 0) without weight."""
     if drive.links is None or params["gravity"] == 0.0:
-        return 0.0
+        return 0.0, 0.0
     share = 1.0 / 24.0
     if modes is not None:
         share = 4.0 / math.pi ** 4 * sum(1.0 / m ** 4 for m in range(1, int(modes) + 1, 2))
-    return share * sum(wn * wn * length ** 3 for wn, length in normal_weights(drive, params))
+    up, low = (share * wn * wn * length ** 3 for wn, length in normal_weights(drive, params))
+    return up, low
 
 
 def tension(raw: float, s_over_d: float) -> float:

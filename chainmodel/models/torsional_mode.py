@@ -123,12 +123,13 @@ def fitted_ends(model) -> tuple[float, float, float] | None:
         omega3 = 2.0 * math.pi * fit.mode
         shape = _two_inertia_shape(model, fit.modal_stiffness, omega3)
         stiffness = fit.modal_stiffness
-        stretch = sum(model._sag_terms)
+        sags = model._sag_terms
+        stretch = sum(sags)
         why = f"it did not converge in {MAX_ITERATIONS} passes"
         for _ in range(MAX_ITERATIONS):
             try:
                 ends = span_ends(model.drive, model.params, stretch=stretch,
-                                 stiffness=stiffness)
+                                 stiffness=stiffness, sags=sags)
                 model._write_span_ends(model.P, ends)
                 omega = driven_mode(model, shape)
             except ValueError as exc:   # no end compliance or no mode for this stiffness

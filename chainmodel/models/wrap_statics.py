@@ -29,7 +29,9 @@ at angle 0):
 * the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
   at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
   driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
-  3's span tensions' sum rises under load; docs/reduced_models.md); a = 0 where the floor cannot
+  3's span tensions' sum rises under load; docs/reduced_models.md); level 2's own fit takes
+  its strings' sag S_N / T^2 into that law (:func:`_floored`), so the floor does not hold the
+  weight a second time ("Level 2's floor and its strings' sag"); a = 0 where the floor cannot
   match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
   found;
 * the static span tension T_0 (mean of the two spans' middle links at rest, no load) and
@@ -188,11 +190,14 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
 
 
 def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
-          stiffness: float) -> tuple[float, float, float]:
+          stiffness: float, sags: tuple[float, float] = (0.0, 0.0)
+          ) -> tuple[float, float, float]:
     """(c, f, a) of the span law at rest: c with which level 1's law stiffens the driven
     sprocket by ``stiffness`` [N m/rad], a with which its slack span under the load M_a is
     level 3's ``slack3`` (None: no floor), f with which it holds T_0 at rest (module
-    docstring; the floor's slope and c fixed in turn, four passes)."""
+    docstring; the floor's slope and c fixed in turn, four passes). ``sags`` [N^2 m]: the sag
+    terms (S_upper, S_lower) the level's own span law adds (level 2's strings): the slack span
+    under M_a is then the law's with them, so the floor does not hold the weight a second time."""
     ro = drive.driven.pitch_radius
     k = params["chain.link_stiffness"]
     g = tooth_period_geometry(drive, 100)
@@ -203,19 +208,21 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
     target = stiffness / (ro * ro)
     b = 0.0
     c = _compliance(target, n_up, n_low, k, 1.0, 1.0)
+    spans = (n_up, n_low, k, sags)
     for _ in range(4):
         t0_lin = _linear(t0, b)
         s = _slope(t0_lin, b)
         c = _compliance(target, n_up, n_low, k, s, s)
-        if slack3 is None or slack3 <= _split_slack(t0_lin, 0.0, c, n_up, n_low, k, dt):
+        if slack3 is None or slack3 <= _split_slack(t0, 0.0, c, spans, dt):
             break
-        b = _softness(t0, slack3, c, n_up, n_low, k, dt)
+        b = _softness(t0, slack3, c, spans, dt)
     t0_lin = _linear(t0, b)
     return c, 0.5 * (x - t0_lin * (links / k + 2.0 * c)), b
 
 
 def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
-              stiffness: float | None = None) -> tuple[float, float, float]:
+              stiffness: float | None = None,
+              sags: tuple[float, float] = (0.0, 0.0)) -> tuple[float, float, float]:
     """(compliance c [m/N], free length f [m], floor a [N]) of levels 0-2's span law: from
     :func:`wrap_fit` with ``torsional.wrap_statics`` (and a drive with a link count); else - or
     where level 3 has no static equilibrium - the seat ladder's compliance
@@ -229,7 +236,8 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
 
     ``stiffness`` [N m/rad], with ``torsional.wrap_statics``: fit c (and the floor and f with
     it) to this driven-sprocket stiffness instead of :func:`wrap_fit`'s K_m (levels 1-2 fit it
-    on their own linearised mode: :mod:`chainmodel.models.torsional_mode`)."""
+    on their own linearised mode: :mod:`chainmodel.models.torsional_mode`), with ``sags`` the
+    per-span sag terms the level's law holds itself (:func:`_ends`)."""
     if drive is not None and drive.links is not None and params.get("torsional.wrap_statics"):
         try:
             fit = wrap_fit(drive, params)
@@ -240,7 +248,7 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
             c, f, a = fit.compliance, fit.free_length, fit.softness
             if stiffness is not None:      # a ValueError here is the caller's (its trial)
                 slack3 = None if math.isnan(fit.loaded_slack) else fit.loaded_slack
-                c, f, a = _ends(drive, params, fit.static_tension, slack3, stiffness)
+                c, f, a = _ends(drive, params, fit.static_tension, slack3, stiffness, sags)
             return c, f + _given_back(stretch, fit.static_tension), a
     c, f = ST.seat_series_compliance(params, drive)
     if drive is None or drive.links is None or params["gravity"] == 0.0:
@@ -270,11 +278,11 @@ def span_sag_terms(drive: Drive, params: Mapping[str, Any]) -> tuple[float, floa
     if drive.links is None or params["gravity"] == 0.0:
         return 0.0, 0.0
     s_eff = weighted(drive, params)[1]
-    s = SG.sag_term(drive, params)
+    terms = SG.span_terms(drive, params)
+    s = sum(terms)
     if not s_eff > 0.0 or not s > 0.0:
         return 0.0, 0.0
-    return tuple(s_eff / s * wn * wn * length ** 3 / 24.0
-                 for wn, length in SG.normal_weights(drive, params))
+    return tuple(s_eff / s * term for term in terms)
 
 
 def weighted(drive: Drive, params: Mapping[str, Any], *,
@@ -466,34 +474,56 @@ def _compliance(target, n_up, n_low, k, su, sl):
     return float(brentq(lambda cc: stiff(cc) - target, lo, hi, xtol=1e-18, rtol=1e-13))
 
 
-def _split_slack(t0_lin, b, c, n_up, n_low, k, dt):
-    """The slack span's tension of the level-1 law at rest under a load whose tension
-    difference is dt: both spans' raw tensions move by their stiffness times one rotation,
-    softplus(t0 + k_u u) - softplus(t0 - k_l u) = dt."""
+def _floored(raw: float, b: float, ks: float) -> float:
+    """The span law's tension with a sag term: T = softplus(raw + ks / T^2, b) (``ks`` = k_eff
+    S [N^3]: the sag's stretch S / T^2 the law adds; softplus itself for ks = 0)."""
+    t = softplus(raw, b)
+    if ks <= 0.0:
+        return t
     from scipy.optimize import brentq
+    # g(T) = T - softplus(raw + ks / T^2, b) rises in T; <= 0 at softplus(raw, b), > 0 at hi
+    lo = max(t, 1e-9 * ks ** (1.0 / 3.0))
+    hi = max(raw, 0.0) + b + ks ** (1.0 / 3.0)
+    return float(brentq(lambda tt: tt - softplus(raw + ks / (tt * tt), b), lo, hi,
+                        xtol=1e-12 * hi, rtol=1e-13))
+
+
+def _split_slack(t0, b, c, spans, dt):
+    """The slack span's tension of the level's law at rest under a load whose tension
+    difference is dt: both spans' raw tensions move by their stiffness times one rotation u
+    from where each holds t0, _floored(R_u + k_u u) - _floored(R_l - k_l u) = dt (``spans``:
+    n_up, n_low, k, their sag terms)."""
+    from scipy.optimize import brentq
+    n_up, n_low, k, (s_up, s_low) = spans
     ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
+    t0_lin = _linear(t0, b)
+    # at u = 0 each span's raw tension plus its sag's k S / t0^2 is t0_lin: both hold t0
+    r_u, r_l = t0_lin - ku * s_up / (t0 * t0), t0_lin - kl * s_low / (t0 * t0)
 
     def diff(u):
-        return softplus(t0_lin + ku * u, b) - softplus(t0_lin - kl * u, b) - dt
+        return (_floored(r_u + ku * u, b, ku * s_up) - _floored(r_l - kl * u, b, kl * s_low)
+                - dt)
 
     hi = dt / min(ku, kl)
     while diff(hi) < 0:
         hi *= 2.0
     u = brentq(diff, 0.0, hi, xtol=1e-15)
-    return softplus(t0_lin - kl * u, b)
+    return _floored(r_l - kl * u, b, kl * s_low)
 
 
-def _softness(t0, slack3, c, n_up, n_low, k, dt):
-    """b with which the level-1 law's slack span under dt is level 3's slack3 (T_0 kept)."""
+def _softness(t0, slack3, c, spans, dt):
+    """b with which the level's law's slack span under dt is level 3's slack3 (T_0 kept)."""
     from scipy.optimize import brentq
 
     def err(b):
-        return _split_slack(_linear(t0, b), b, c, n_up, n_low, k, dt) - slack3
+        return _split_slack(t0, b, c, spans, dt) - slack3
 
     hi = max(slack3, 1e-3)
     while err(hi) < 0 and hi < 1e3 * t0:
         hi *= 2.0
     if err(hi) < 0:
+        return 0.0
+    if err(1e-9 * t0) > 0:      # the sag alone holds the slack span above level 3's
         return 0.0
     return float(brentq(err, 1e-9 * t0, hi, xtol=1e-9 * t0))
 
