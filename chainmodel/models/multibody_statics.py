@@ -46,6 +46,7 @@ from ..kernels import multibody_layout as K
 from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
+from .modal_assurance import closest_mode
 
 __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mode"]
 
@@ -450,9 +451,9 @@ def linear_driven_mode(model, solution: StaticSolution) -> float:
     # the span rollers' inertia kept: the mode that continues it (largest mass-weighted MAC
     # with its shape; Allemang & Brown 1982)
     lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
-    norm = np.einsum("ij,i,ij->j", phi, mass, phi)
-    mac = np.where(lam > 0.0, (phi.T @ (mass * ref)) ** 2 / (norm * (ref @ (mass * ref))), -1.0)
-    i = int(np.argmax(mac))
-    if mac[i] <= 0.0:
-        raise ValueError("level 3 linearised at rest has no positive mode in the driven sprocket")
+    try:
+        i = closest_mode(lam, phi, mass, ref)
+    except ValueError:
+        raise ValueError("level 3 linearised at rest has no positive mode in the driven "
+                         "sprocket") from None
     return math.sqrt(lam[i])

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from .base import Inputs
+from .modal_assurance import closest_mode
 
 __all__ = ["linear_positions", "driven_mode", "fitted_ends", "TOLERANCE"]
 
@@ -91,17 +92,12 @@ def driven_mode(model, shape: np.ndarray) -> float:
     x = model.initial_state(u)
     _, a = linear_positions(model, x, u)
     w2, vecs = np.linalg.eig(a)
-    mass = _position_mass(model)
     ref = np.zeros(len(a))
     ref[:len(shape)] = shape
-    best, mac = -1, -1.0
-    for i in range(len(w2)):
-        v = vecs[:, i].real
-        m = (v @ mass @ ref) ** 2 / ((v @ mass @ v) * (ref @ mass @ ref))
-        if w2[i].real > 0.0 and m > mac:
-            best, mac = i, m
-    if best < 0:
-        raise ValueError("no linear mode with a positive stiffness at rest")
+    try:
+        best = closest_mode(w2.real, vecs.real, _position_mass(model), ref)
+    except ValueError:
+        raise ValueError("no linear mode with a positive stiffness at rest") from None
     return math.sqrt(w2[best].real)
 
 
