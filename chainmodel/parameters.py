@@ -230,7 +230,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        "span from level 3 of the same drive (its rollers, links, seats with clearance and "
        "flanks, gravity): the static tension is level 3's static equilibrium's, the driven "
        "sprocket's torsional mode of each level linearised at rest level 3's linear one (its "
-       "statics and span rollers' inertia) "
+       "statics and span rollers' inertia; their means over a driver tooth period) "
        "and the loaded split at rest follows level 3's statics (docs/reduced_models.md, \"One "
        "wrap\"); off, "
        "torsional.seat_compliance decides and the spans' weight adds the elastic catenary's "

@@ -1,8 +1,8 @@
 """Level 3 linearised about its static equilibrium (shared by tests/test_top_rung_modes.py and
 tests/test_level1_vs_level3.py), written here independently of the models' own analyses:
 central differences of ``MultibodyModel.rhs`` in the positions at the static equilibrium of
-chainmodel.models.multibody_statics (driver angle 0, no load, velocities zero, the input shaft
-held), no damping; a mode's driven-sprocket share is its kinetic energy in the driven sprocket
+chainmodel.models.multibody_statics (the input shaft held at a driver angle, 0 by default; no
+load, velocities zero), no damping; a mode's driven-sprocket share is its kinetic energy in the driven sprocket
 over its total (masses: the sprocket inertias and the link masses)."""
 
 from __future__ import annotations
@@ -18,15 +18,16 @@ from chainmodel.scene import load_scene
 
 
 class Linearised:
-    """Level 3 linearised about its static equilibrium at driver angle 0, no load."""
+    """Level 3 linearised about its static equilibrium at ``driver_angle`` [rad], no load."""
 
-    def __init__(self, name):
+    def __init__(self, name, driver_angle: float = 0.0):
         sc = load_scene(name, fidelity=3)
         self.scene = sc
         model = sc.model()
-        x0 = static_state(model).state
+        x0 = static_state(model, driver_angle).state
         n = 2 + 2 * model.M
-        held = Inputs(float(x0[0]) if model.params["input_shaft.rigid"] else 0.0, 0.0, 0.0)
+        held = Inputs(float(x0[0]) if model.params["input_shaft.rigid"] else driver_angle,
+                      0.0, 0.0)
         A = np.empty((n, n))
         h = 1e-9
         for j in range(n):

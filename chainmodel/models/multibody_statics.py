@@ -48,7 +48,8 @@ from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mode"]
+__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mode",
+           "linear_driven_modes"]
 
 #: relative force tolerance (of the weight per roller) of a converged solution
 TOLERANCE = 1e-3
@@ -380,8 +381,16 @@ def _condensed_modes(k, mass, keep):
 
 
 def linear_driven_mode(model, solution: StaticSolution) -> float:
-    """omega [rad/s] of level 3's driven-sprocket mode about a static equilibrium ``solution``
-    (no load), small amplitude, undamped.
+    """omega [rad/s] of level 3's driven-sprocket mode about ``solution``
+    (:func:`linear_driven_modes`)."""
+    return linear_driven_modes(model, solution)[0]
+
+
+def linear_driven_modes(model, solution: StaticSolution, near: float | None = None
+                        ) -> tuple[float, float]:
+    """(omega, omega_s) [rad/s]: level 3's driven-sprocket mode about a static equilibrium
+    ``solution`` (no load), small amplitude, undamped, and its static condensation's mode it
+    continues.
 
     K = -diag(m) dA/dq, the accelerations A of the dynamic model's own force law differentiated
     by central differences in every position at zero velocity (the joint and link dampers act
@@ -404,6 +413,9 @@ def linear_driven_mode(model, solution: StaticSolution) -> float:
     largest mass-weighted modal assurance criterion against the static one's shape (the same
     mode, moved by the spans' inertia; Allemang & Brown, 1982). Condensing the seated rollers
     also removes the local modes of a light sprocket rattling against its own rollers at kHz.
+    ``near`` [rad/s]: take the static condensation's mode nearest this omega_s instead (the
+    same mode at another driver position, where the shares of a flexible shaft's two modes may
+    swap: xu2010 with half its contact stiffness).
     Checked against level 3's own ring-down on C1, xu2010 and unseen drives
     (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
     static stiffness is singular or no positive mode exists."""
@@ -445,6 +457,9 @@ def linear_driven_mode(model, solution: StaticSolution) -> float:
     energy = mass[:, None] * phi_s * phi_s
     share_s = np.where(lam_s > 0.0, energy[driven].sum(axis=0) / energy.sum(axis=0), -1.0)
     j = int(np.argmax(share_s))
+    if near is not None and share_s[j] > 0.0:
+        positive = np.flatnonzero(lam_s > 0.0)
+        j = int(positive[np.argmin(np.abs(np.log(np.sqrt(lam_s[positive]) / near)))])
     if share_s[j] <= 0.0:
         raise ValueError("level 3's static condensation has no positive driven-sprocket mode")
     ref = phi_s[:, j]
@@ -456,4 +471,4 @@ def linear_driven_mode(model, solution: StaticSolution) -> float:
     except ValueError:
         raise ValueError("level 3 linearised at rest has no positive mode in the driven "
                          "sprocket") from None
-    return math.sqrt(lam[i])
+    return math.sqrt(lam[i]), math.sqrt(lam_s[j])

@@ -15,8 +15,9 @@ that two-inertia system:
 Level 3's own linearisation holds its span rollers' transverse inertia, so a level with string
 modes of its own counts them twice on K_m. Each level therefore fits the stiffness to its own
 linearisation, K_{j+1} = K_j (omega_3 / omega_j)^2 from K_0 = K_m until omega_j is omega_3 within
-``TOLERANCE``: omega_j the level's mode at rest (driver at angle 0, input held, no load, as level
-3's) from central differences of its own right-hand side. The mode is the one with the largest
+``TOLERANCE``: omega_j the level's mode at rest (input held, no load) from central differences
+of its own right-hand side, its mean over the driver positions in a tooth period at which
+wrap_fit takes level 3's (:func:`tooth_mean_mode`). The mode is the one with the largest
 mass-weighted MAC (Allemang & Brown 1982) against the two-inertia system's mode at K_m, the
 string coordinates counted in the norm with their modal mass rho L / 2 (a sine mode's), so a
 string mode never passes for the rotation's.
@@ -31,7 +32,7 @@ import numpy as np
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["linear_positions", "driven_mode", "fitted_ends", "TOLERANCE"]
+__all__ = ["linear_positions", "driven_mode", "tooth_mean_mode", "fitted_ends", "TOLERANCE"]
 
 #: the fitted mode's relative distance from level 3's at which the iteration stops
 TOLERANCE = 1e-5
@@ -85,20 +86,46 @@ def _two_inertia_shape(model, stiffness: float, omega: float) -> np.ndarray:
     return v[:, int(np.argmin(np.abs(w2.real - omega * omega)))].real
 
 
-def driven_mode(model, shape: np.ndarray) -> float:
-    """The level's driven-sprocket mode at rest [rad/s] (module docstring): the linear mode
-    with the largest mass-weighted MAC against the sprocket rotations ``shape``."""
-    u = Inputs()
+def driven_mode(model, shape: np.ndarray, angle: float = 0.0) -> float:
+    """The level's driven-sprocket mode at rest [rad/s] with the input shaft held at ``angle``
+    (module docstring): the linear mode with the largest mass-weighted MAC against the
+    sprocket rotations ``shape``."""
+    return _ranked_mode(model, shape, angle)[0]
+
+
+def _ranked_mode(model, shape: np.ndarray, angle: float, rank: int | None = None
+                 ) -> tuple[float, int]:
+    """(omega [rad/s], its rank among the positive modes in frequency): :func:`driven_mode`,
+    or with ``rank`` the mode of that rank (where the level has as many)."""
+    u = Inputs(angle=angle)
     x = model.initial_state(u)
     _, a = linear_positions(model, x, u)
-    w2, vecs = np.linalg.eig(a)
+    w2 = np.linalg.eig(a)
+    lam, vecs = w2[0].real, w2[1].real
+    positive = np.sort(lam[lam > 0.0])
+    if rank is not None and rank < positive.size:
+        return math.sqrt(positive[rank]), rank
     ref = np.zeros(len(a))
     ref[:len(shape)] = shape
     try:
-        best = closest_mode(w2.real, vecs.real, _position_mass(model), ref)
+        best = closest_mode(lam, vecs, _position_mass(model), ref)
     except ValueError:
         raise ValueError("no linear mode with a positive stiffness at rest") from None
-    return math.sqrt(w2[best].real)
+    return math.sqrt(lam[best]), int(np.searchsorted(positive, lam[best]))
+
+
+def tooth_mean_mode(model, shape: np.ndarray) -> float:
+    """The mean over ``wrap_statics.ANGLES`` driver positions in a tooth period [rad/s], as
+    :func:`~chainmodel.models.wrap_statics.wrap_fit` takes level 3's, of the mode
+    :func:`driven_mode` picks at angle 0 and, at the other positions, the mode of the same rank
+    in frequency: where a string mode crosses the driven sprocket's (level 2 on C1: 22-23 Hz
+    against 25 Hz), the two share the rotation and the larger MAC jumps between them, the
+    branch does not."""
+    from .wrap_statics import ANGLES
+    step = 2.0 * math.pi / model.drive.n_driver / ANGLES
+    omega, rank = _ranked_mode(model, shape, 0.0)
+    omegas = [omega] + [_ranked_mode(model, shape, j * step, rank)[0] for j in range(1, ANGLES)]
+    return float(np.mean(omegas))
 
 
 def fitted_ends(model) -> tuple[float, float, float] | None:
@@ -127,7 +154,7 @@ def fitted_ends(model) -> tuple[float, float, float] | None:
                 ends = span_ends(model.drive, model.params, stretch=stretch,
                                  stiffness=stiffness, sags=sags)
                 model._write_span_ends(model.P, ends)
-                omega = driven_mode(model, shape)
+                omega = tooth_mean_mode(model, shape)
             except ValueError as exc:   # no end compliance or no mode for this stiffness
                 why = f"at {stiffness:.4g} N m/rad: {exc}"
                 break

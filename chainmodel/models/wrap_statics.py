@@ -15,12 +15,15 @@ at angle 0):
 * the driven sprocket's torsional stiffness K_m at which levels 1-2's two-inertia system
   (:func:`modal_stiffness`) rings at level 3's linear driven-sprocket mode
   (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`: level 3 linearised at
-  rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept), and
+  rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept),
+  its mean over ``ANGLES`` driver positions in a tooth period (level 3's static tension and
+  with it its mode move over a tooth: C1 364-551 N and 24.5-25.3 Hz; levels 1-2's
+  tooth-period-mean link counts see the mean; :func:`_tooth_mean_mode`), and
   level 1's R_o^2 sum_spans s_s / (n_s / k + c) = K_m gives c (n_s the tooth-period-mean link
   counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Levels 1-2 then refit the
   stiffness, floor and f with it, to their own linear mode at rest
-  (:mod:`chainmodel.models.torsional_mode`: level 2's string modes push the two-inertia
-  system's mode up, by 3 % on C1); K_m is where that fit starts. Not the statics' secant
+  (:mod:`chainmodel.models.torsional_mode`, the same tooth-period mean: level 2's string
+  modes push the two-inertia system's mode up, by 3 % on C1); K_m is where that fit starts. Not the statics' secant
   K_3 = 2 dM / |phi2(+dM) - phi2(-dM)| over a load step dM = ``LOAD_STEP`` T_0 R_o either way
   (the static condensation, kept as ``WrapFit.stiffness``): above the spans' string modes
   their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
@@ -39,9 +42,9 @@ at angle 0):
   X, D without seats) give f.
 
 So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
-tension decay around the wrap included, level 1's driven-sprocket mode is level 3's and its
-loaded split at rest follows level 3's. Computed once per (drive, parameters): 3 + 4 x 5
-static solves and one linearisation.
+tension decay around the wrap included, level 1's driven-sprocket mode is level 3's over a
+tooth period and its loaded split at rest follows level 3's. Computed once per (drive,
+parameters): 3 + 4 x 5 static solves and four linearisations.
 """
 
 from __future__ import annotations
@@ -128,7 +131,7 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     # level 3 and its statics are imported when first needed: levels 0-2 import this module
     # and most of their runs never ask for them
     from .multibody import MultibodyModel
-    from .multibody_statics import linear_driven_mode, solve_statics, static_state
+    from .multibody_statics import solve_statics, static_state
     p3 = {k: v for k, v in params.items() if k in PRM.BY_NAME}
     model = MultibodyModel(drive, p3)
     rest = static_state(model)
@@ -150,26 +153,31 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     # the loaded split: level 3's slack span at a load that would take a linear law's slack
     # span to SLACK_SHARE of T_0
     m_b = (1.0 - SLACK_SHARE) * 2.0 * t0 * ro
+    # the driver at ANGLES positions over a tooth period, as level 1's tooth-period-mean link
+    # counts see the chain: the loaded split's and the mode's means
+    rests = [rest]
+    try:
+        for j in range(1, ANGLES):
+            rests.append(static_state(model, 2.0 * math.pi / drive.n_driver * j / ANGLES))
+            wall += rests[-1].wall
+    except ValueError:  # positions with no equilibrium: the loaded split has no mean there
+        pass
     slack3 = None
+    if len(rests) == ANGLES:
+        try:
+            slacks = []
+            for start in rests:
+                state = start.state
+                for share in (0.25, 0.5, 0.75, 1.0):
+                    sol = solve_statics(model, start.driver_angle, share * m_b, start=state)
+                    state = sol.state
+                    wall += sol.wall
+                slacks.append(min(sol.tension_upper, sol.tension_lower))
+            slack3 = float(np.mean(slacks))
+        except ValueError:   # no loaded equilibrium found: no floor
+            slack3 = None
     try:
-        # the mean over a tooth period of the driver (ANGLES positions), as level 1's
-        # tooth-period-mean link counts see it
-        slacks = []
-        for j in range(ANGLES):
-            angle = 2.0 * math.pi / drive.n_driver * j / ANGLES
-            start = rest if j == 0 else static_state(model, angle)
-            state = start.state
-            wall += start.wall if j else 0.0
-            for share in (0.25, 0.5, 0.75, 1.0):
-                sol = solve_statics(model, angle, share * m_b, start=state)
-                state = sol.state
-                wall += sol.wall
-            slacks.append(min(sol.tension_upper, sol.tension_lower))
-        slack3 = float(np.mean(slacks))
-    except ValueError:   # no loaded equilibrium found: no floor
-        slack3 = None
-    try:
-        omega = linear_driven_mode(model, rest)
+        omega, short = _tooth_mean_mode(model, rests)
         km = modal_stiffness(drive, p3, omega)
     except ValueError as exc:   # no mode to take (singular roller stiffness): the secant
         omega, km = float("nan"), k3
@@ -179,7 +187,16 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
             f"stiffer than the mode's (their torsional mode about +5 % on C1 and xu2010, up to "
             f"2x on a sagging chain); run level 3 where the torsional mode matters")
     else:
-        _FELL_BACK.pop((None,) + key, None)
+        if short:
+            _FELL_BACK[(None,) + key] = (
+                f"level 3's linear driven-sprocket mode was found at {ANGLES - short} of "
+                f"{ANGLES} driver positions in a tooth period (no static equilibrium or no "
+                f"mode at the others), so levels 1-2's wrap stiffness is fitted to their mean "
+                f"{omega / (2.0 * math.pi):.4g} Hz, not the tooth period's (level 3's mode "
+                f"moves by 3 % over a tooth on C1); run level 3 where the torsional mode "
+                f"matters")
+        else:
+            _FELL_BACK.pop((None,) + key, None)
     c, f, b = _ends(drive, p3, t0, slack3, km)
     fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
@@ -187,6 +204,25 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         _CACHE.clear()
     _CACHE[key] = fit
     return fit
+
+
+def _tooth_mean_mode(model, rests) -> tuple[float, int]:
+    """(omega [rad/s], positions missed): the mean of level 3's linear driven-sprocket mode
+    (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`) over the driver
+    positions of ``rests`` and the ones of ``ANGLES`` with no equilibrium; ValueError where
+    the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
+    stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
+    see the chain's tooth-period mean. The mode at the other positions continues the static
+    condensation's mode nearest angle 0's (``near``)."""
+    from .multibody_statics import linear_driven_modes
+    omega, static = linear_driven_modes(model, rests[0])
+    omegas = [omega]
+    for rest in rests[1:]:
+        try:
+            omegas.append(linear_driven_modes(model, rest, near=static)[0])
+        except ValueError:
+            pass
+    return float(np.mean(omegas)), ANGLES - len(omegas)
 
 
 def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
@@ -531,7 +567,7 @@ def _softness(t0, slack3, c, spans, dt):
 def _loaded(model, rest, load):
     """The equilibrium under ``load``, Newton started from the unloaded one ``rest`` (a sagging
     span's load step is small next to its distance from the straight layout)."""
-    from .multibody_statics import linear_driven_mode, solve_statics, static_state
+    from .multibody_statics import solve_statics, static_state
     try:
         return solve_statics(model, 0.0, load, start=rest.state)
     except ValueError:
