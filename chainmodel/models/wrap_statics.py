@@ -23,9 +23,10 @@ at angle 0):
   counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Levels 1-2 then refit the
   stiffness, floor and f with it, to their own linear mode at rest
   (:mod:`chainmodel.models.torsional_mode`, the same tooth-period mean: level 2's string
-  modes push the two-inertia system's mode up, by 3 % on C1); K_m is where that fit starts. Not the statics' secant
-  K_3 = 2 dM / |phi2(+dM) - phi2(-dM)| over a load step dM = ``LOAD_STEP`` T_0 R_o either way
-  (the static condensation, kept as ``WrapFit.stiffness``): above the spans' string modes
+  modes push the two-inertia system's mode up, by 3 % on C1); K_m is where that fit starts.
+  Not the statics' secant K_3 = 2 dM / |phi2(+dM) - phi2(-dM)| over a load step
+  dM = ``LOAD_STEP`` T_0 R_o either way (the static condensation, kept as
+  ``WrapFit.stiffness``): above the spans' string modes
   their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
   xu2010) to a factor of 4 in stiffness (a sagging chain, whose static secant is its sag's);
   docs/reduced_models.md, "Item 3, the torsional mode: one wrap";
