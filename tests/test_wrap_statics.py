@@ -209,7 +209,7 @@ load_torque = 8.0
 def test_sagging_drive_mode_is_level3s_ring_down(tmp_path):
     """A drive the presets do not hold (08B 13/39, tight wrap, no pretension: its spans carry
     their sag tension, about 50 N): level 3's ring-down (sudden start to 5 rpm) is the linear
-    mode linear_driven_mode picks within 3 % - the mode choice checked by level 3's own
+    mode linear_driven_modes picks within 3 % - the mode choice checked by level 3's own
     dynamics, not by the linearisation - and level 1 on the wrap within 3 % of it. The statics'
     secant is its sag's, about a fifth of the stiffness the mode needs: level 1 on it, or on
     the seat ladder with the quasi-static sag (the default), rings 30-40 % low."""

@@ -1,6 +1,6 @@
 """The mass-weighted modal assurance criterion (Allemang & Brown 1982), written once for the two
 places that pick the driven sprocket's mode among a linearisation's modes: level 3's
-(:func:`~chainmodel.models.multibody_statics.linear_driven_mode`) and levels 1-2's
+(:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) and levels 1-2's
 (:func:`~chainmodel.models.torsional_mode.driven_mode`)."""
 
 from __future__ import annotations

@@ -48,8 +48,7 @@ from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mode",
-           "linear_driven_modes"]
+__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes"]
 
 #: relative force tolerance (of the weight per roller) of a converged solution
 TOLERANCE = 1e-3
@@ -378,12 +377,6 @@ def _condensed_modes(k, mass, keep):
             raise ValueError("level 3's rollers have no static stiffness to condense")
     lam, vec = sl.eigh(T.T @ k @ T, T.T @ (mass[:, None] * T))
     return lam, T @ vec
-
-
-def linear_driven_mode(model, solution: StaticSolution) -> float:
-    """omega [rad/s] of level 3's driven-sprocket mode about ``solution``
-    (:func:`linear_driven_modes`)."""
-    return linear_driven_modes(model, solution)[0]
 
 
 def linear_driven_modes(model, solution: StaticSolution, near: float | None = None

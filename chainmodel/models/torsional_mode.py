@@ -86,22 +86,16 @@ def _two_inertia_shape(model, stiffness: float, omega: float) -> np.ndarray:
     return v[:, int(np.argmin(np.abs(w2.real - omega * omega)))].real
 
 
-def driven_mode(model, shape: np.ndarray, angle: float = 0.0) -> float:
-    """The level's driven-sprocket mode at rest [rad/s] with the input shaft held at ``angle``
-    (module docstring): the linear mode with the largest mass-weighted MAC against the
-    sprocket rotations ``shape``."""
-    return _ranked_mode(model, shape, angle)[0]
-
-
-def _ranked_mode(model, shape: np.ndarray, angle: float, rank: int | None = None
-                 ) -> tuple[float, int]:
-    """(omega [rad/s], its rank among the positive modes in frequency): :func:`driven_mode`,
-    or with ``rank`` the mode of that rank (where the level has as many)."""
+def driven_mode(model, shape: np.ndarray, angle: float = 0.0, rank: int | None = None
+                ) -> tuple[float, int]:
+    """(omega [rad/s], its rank among the positive modes in frequency): the level's
+    driven-sprocket mode at rest with the input shaft held at ``angle`` (module docstring), the
+    linear mode with the largest mass-weighted MAC against the sprocket rotations ``shape``;
+    with ``rank``, the mode of that rank instead (where the level has as many)."""
     u = Inputs(angle=angle)
-    x = model.initial_state(u)
-    _, a = linear_positions(model, x, u)
-    w2 = np.linalg.eig(a)
-    lam, vecs = w2[0].real, w2[1].real
+    _, a = linear_positions(model, model.initial_state(u), u)
+    lam, vecs = np.linalg.eig(a)
+    lam, vecs = lam.real, vecs.real
     positive = np.sort(lam[lam > 0.0])
     if rank is not None and rank < positive.size:
         return math.sqrt(positive[rank]), rank
@@ -115,17 +109,16 @@ def _ranked_mode(model, shape: np.ndarray, angle: float, rank: int | None = None
 
 
 def tooth_mean_mode(model, shape: np.ndarray) -> float:
-    """The mean over ``wrap_statics.ANGLES`` driver positions in a tooth period [rad/s], as
-    :func:`~chainmodel.models.wrap_statics.wrap_fit` takes level 3's, of the mode
-    :func:`driven_mode` picks at angle 0 and, at the other positions, the mode of the same rank
-    in frequency: where a string mode crosses the driven sprocket's (level 2 on C1: 22-23 Hz
-    against 25 Hz), the two share the rotation and the larger MAC jumps between them, the
-    branch does not."""
-    from .wrap_statics import ANGLES
-    step = 2.0 * math.pi / model.drive.n_driver / ANGLES
-    omega, rank = _ranked_mode(model, shape, 0.0)
-    omegas = [omega] + [_ranked_mode(model, shape, j * step, rank)[0] for j in range(1, ANGLES)]
-    return float(np.mean(omegas))
+    """The mean [rad/s] over wrap_statics' driver positions in a tooth period
+    (:func:`~chainmodel.models.wrap_statics.tooth_positions`, where wrap_fit takes level 3's)
+    of the mode :func:`driven_mode` picks at angle 0 and, at the other positions, the mode of
+    the same rank in frequency: where a string mode crosses the driven sprocket's (level 2 on
+    C1: 22-23 Hz against 25 Hz), the two share the rotation and the larger MAC jumps between
+    them, the branch does not."""
+    from .wrap_statics import tooth_positions
+    first, *others = tooth_positions(model.drive)
+    omega, rank = driven_mode(model, shape, first)
+    return float(np.mean([omega] + [driven_mode(model, shape, a, rank)[0] for a in others]))
 
 
 def fitted_ends(model) -> tuple[float, float, float] | None:

@@ -14,7 +14,7 @@ at angle 0):
 
 * the driven sprocket's torsional stiffness K_m at which levels 1-2's two-inertia system
   (:func:`modal_stiffness`) rings at level 3's linear driven-sprocket mode
-  (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`: level 3 linearised at
+  (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`: level 3 linearised at
   rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept),
   its mean over ``ANGLES`` driver positions in a tooth period (level 3's static tension and
   with it its mode move over a tooth: C1 364-551 N and 24.5-25.3 Hz; levels 1-2's
@@ -63,7 +63,7 @@ from . import span_sag as SG
 from .chain_inertia import sprocket_mass_matrix
 from . import static_tension as ST
 
-__all__ = ["WrapFit", "wrap_fit", "span_ends", "static_span_tension", "weighted_static_tension",
+__all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension", "weighted_static_tension",
            "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "fallbacks",
            "note_fallback", "parameters_key"]
 
@@ -158,8 +158,8 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     # counts see the chain: the loaded split's and the mode's means
     rests = [rest]
     try:
-        for j in range(1, ANGLES):
-            rests.append(static_state(model, 2.0 * math.pi / drive.n_driver * j / ANGLES))
+        for angle in tooth_positions(drive)[1:]:
+            rests.append(static_state(model, angle))
             wall += rests[-1].wall
     except ValueError:  # positions with no equilibrium: the loaded split has no mean there
         pass
@@ -207,9 +207,15 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     return fit
 
 
+def tooth_positions(drive: Drive) -> np.ndarray:
+    """The ``ANGLES`` driver angles [rad] over a tooth period at which the fit takes level 3's
+    loaded split and mode, and levels 1-2 their own mode (means over them), angle 0 first."""
+    return 2.0 * math.pi / drive.n_driver * np.arange(ANGLES) / ANGLES
+
+
 def _tooth_mean_mode(model, rests) -> tuple[float, int]:
     """(omega [rad/s], positions missed): the mean of level 3's linear driven-sprocket mode
-    (:func:`~chainmodel.models.multibody_statics.linear_driven_mode`) over the driver
+    (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) over the driver
     positions of ``rests`` and the ones of ``ANGLES`` with no equilibrium; ValueError where
     the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
     stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
