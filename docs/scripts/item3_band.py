@@ -13,6 +13,8 @@ Two measurements per variant:
     python docs/scripts/item3_band.py            # both tables (about 20 s, kernels warm)
     python docs/scripts/item3_band.py ring       # the ring-down table only
     python docs/scripts/item3_band.py running    # the running table only
+    python docs/scripts/item3_band.py c1         # C1 at 60 rpm and, with the band, at 100 rpm
+                                                 # (its torsional resonance; about 15 s)
 """
 
 from __future__ import annotations
@@ -82,6 +84,30 @@ def running_table():
                   f"{cells[1]:>16s}", flush=True)
 
 
+def c1_spans(level, rpm, p, **kw):
+    r = chainmodel.simulate("C1", fidelity=level, input_speed_rpm=rpm, duration=1.2,
+                            output_interval=2e-4, parameters=p, **kw)
+    m = r.time >= 0.6
+    return float(np.mean(r["tight_span.tension"][m])), float(np.mean(r["slack_span.tension"][m]))
+
+
+def c1_table():
+    print("C1 (its preset load), mean span tensions over 0.6-1.2 s; levels 1-2 with "
+          "torsional.wrap_statics, error against level 3 at the same parameters (tight / slack)")
+    print(f"{'rpm':>4s} {'variant':24s} {'level 3 [N]':>16s} {'level 1':>16s} {'level 2':>16s}")
+    for rpm, variants in ((60.0, VARIANTS[:1]), (100.0, VARIANTS)):
+        for what, factor in variants:
+            p = overrides("C1", what, factor)
+            t3, s3 = c1_spans(3, rpm, p)
+            cells = []
+            for level in (1, 2):
+                t, s = c1_spans(level, rpm, p, torsional_wrap_statics=True)
+                cells.append(f"{100 * (t / t3 - 1):+5.1f} / {100 * (s / s3 - 1):+5.1f}%")
+            label = what if what == "nominal" else f"{what} x{factor:g}"
+            print(f"{rpm:4.0f} {label:24s} {t3:7.1f} / {s3:6.1f} {cells[0]:>16s} "
+                  f"{cells[1]:>16s}", flush=True)
+
+
 def main(argv):
     what = argv[1] if len(argv) > 1 else "both"
     t0 = time.time()
@@ -89,6 +115,8 @@ def main(argv):
         ring_table()
     if what in ("both", "running"):
         running_table()
+    if what == "c1":
+        c1_table()
     print(f"wall {time.time() - t0:.0f} s")
 
 

@@ -17,6 +17,9 @@ a flexible one: the two-inertia system with the shaft spring, the driven sprocke
                                                    # changed at a time (about 5 s)
     python docs/scripts/ringdown.py amplitude      # levels 1-3 against the start's speed,
                                                    # levels 1-2 on level 3's wrap (about 40 s)
+    python docs/scripts/ringdown.py positions      # the linear modes at 8 driver positions in
+                                                   # a tooth: level 3 (its static tension) and
+                                                   # levels 1-2 on its wrap (a few seconds)
 """
 
 from __future__ import annotations
@@ -110,12 +113,47 @@ def amplitude():
                 cells.append(f"{f:8.2f} ({100 * (f / f3 - 1):+5.1f}%)")
             print(f"{name:8s} {rpm:4.1f}rpm {f3:8.2f} " + " ".join(cells), flush=True)
         print(f"{name:8s} {'linear':>6s} {mode:8.2f}   (level 3 linearised at rest, "
-              "multibody_statics.linear_driven_mode)", flush=True)
+              "multibody_statics.linear_driven_modes)", flush=True)
+
+
+def positions(count=8):
+    """Level 3's static span tensions and linear driven-sprocket mode, and levels 1-2's own
+    linear mode with the option, at ``count`` driver positions over a tooth period (the fit
+    takes the mean over wrap_statics.ANGLES of them: docs/reduced_models.md, "Over a tooth
+    period, not at angle 0")."""
+    import math
+    from chainmodel.models import torsional_mode as TM
+    from chainmodel.models.multibody_statics import linear_driven_modes, static_state
+    from chainmodel.models.wrap_statics import wrap_fit
+    for name in ("C1", "xu2010"):
+        m3 = load_scene(name, fidelity=3).model()
+        levels = {}
+        for level in (1, 2):
+            m = load_scene(name, fidelity=level, torsional_wrap_statics=True).model()
+            fit = wrap_fit(m.drive, m.params)
+            levels[level] = (m, TM._two_inertia_shape(m, fit.modal_stiffness,
+                                                      2.0 * math.pi * fit.mode))
+        print(f"{name}: driver position [tooth], level 3 static tension upper / lower [N], "
+              f"linear mode [Hz] of level 3, of levels 1 and 2 with torsional.wrap_statics")
+        near, ranks = None, {}
+        for j in range(count):
+            angle = 2.0 * math.pi / m3.drive.n_driver * j / count
+            st = static_state(m3, angle)
+            w3, ws = linear_driven_modes(m3, st, near=near)
+            near = near or ws
+            cells = []
+            for level, (m, shape) in levels.items():
+                w, ranks[level] = TM.driven_mode(m, shape, angle, ranks.get(level))
+                cells.append(f"{w / (2 * math.pi):8.3f}")
+            print(f"  {j}/{count}  {st.tension_upper:7.1f} / {st.tension_lower:7.1f}  "
+                  f"{w3 / (2 * math.pi):8.3f}  " + "  ".join(cells), flush=True)
 
 
 def main(argv):
     if argv[1:2] == ["variants"]:
         return variants()
+    if argv[1:2] == ["positions"]:
+        return positions()
     if argv[1:2] == ["amplitude"]:
         return amplitude()
     names = argv[1].split(",") if len(argv) > 1 else ["C1", "xu2010"]

@@ -3,7 +3,7 @@ docs/reduced_models.md "Item 3, the torsional mode: one wrap"): the three exampl
 eight drives written by ``chainmodel new-scene`` (docs/scripts/unseen_drives/, some with no
 pretension, where the spans carry only their sag tension).
 
-Per drive: level 3 linearised at rest (wrap_fit.mode, multibody_statics.linear_driven_mode),
+Per drive: level 3 linearised at rest (wrap_fit.mode, multibody_statics.linear_driven_modes),
 the ring-down after a sudden start to 5 rpm (tests/ringdown_check.py's ``ring``, band
 0.6-1.4 x that mode) at level 3, at levels 1 and 2 with ``torsional.wrap_statics`` and at
 level 1 by default (band 0.3-1.4 x: on a hanging chain it rings 40 % low, and 0.6 x clipped its
