@@ -60,48 +60,27 @@ def ring_table():
             print(f"{name:7s} {label:24s} {f3:8.2f} {cells[0]:>16s} {cells[1]:>16s}", flush=True)
 
 
-def spans(level, rpm, p, **kw):
-    r = chainmodel.simulate("xu2010", fidelity=level, input_speed_rpm=rpm, duration=0.6,
+def spans(name, level, rpm, p, duration, **kw):
+    """(tight, slack) mean span tensions [N] over the second half of ``duration``."""
+    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=rpm, duration=duration,
                             output_interval=2e-4, parameters=p, **kw)
-    m = r.time >= 0.3
+    m = r.time >= 0.5 * duration
     return float(np.mean(r["tight_span.tension"][m])), float(np.mean(r["slack_span.tension"][m]))
 
 
-def running_table():
-    print("xu2010 at 43.2 N m, mean span tensions over 0.3-0.6 s; levels 1-2 with "
-          "torsional.wrap_statics, error against level 3 at the same parameters (tight / slack)")
+def span_table(name, rows, duration, load):
+    """Levels 1-2 with the option against level 3 on the same parameters, per (rpm, variants)."""
+    print(f"{name} at {load}, mean span tensions over {duration / 2:g}-{duration:g} s; levels "
+          "1-2 with torsional.wrap_statics, error against level 3 at the same parameters "
+          "(tight / slack)")
     print(f"{'rpm':>4s} {'variant':24s} {'level 3 [N]':>16s} {'level 1':>16s} {'level 2':>16s}")
-    for rpm in SPEEDS:
-        for what, factor in VARIANTS:
-            p = overrides("xu2010", what, factor)
-            t3, s3 = spans(3, rpm, p)
-            cells = []
-            for level in (1, 2):
-                t, s = spans(level, rpm, p, torsional_wrap_statics=True)
-                cells.append(f"{100 * (t / t3 - 1):+5.1f} / {100 * (s / s3 - 1):+5.1f}%")
-            label = what if what == "nominal" else f"{what} x{factor:g}"
-            print(f"{rpm:4.0f} {label:24s} {t3:7.1f} / {s3:6.1f} {cells[0]:>16s} "
-                  f"{cells[1]:>16s}", flush=True)
-
-
-def c1_spans(level, rpm, p, **kw):
-    r = chainmodel.simulate("C1", fidelity=level, input_speed_rpm=rpm, duration=1.2,
-                            output_interval=2e-4, parameters=p, **kw)
-    m = r.time >= 0.6
-    return float(np.mean(r["tight_span.tension"][m])), float(np.mean(r["slack_span.tension"][m]))
-
-
-def c1_table():
-    print("C1 (its preset load), mean span tensions over 0.6-1.2 s; levels 1-2 with "
-          "torsional.wrap_statics, error against level 3 at the same parameters (tight / slack)")
-    print(f"{'rpm':>4s} {'variant':24s} {'level 3 [N]':>16s} {'level 1':>16s} {'level 2':>16s}")
-    for rpm, variants in ((60.0, VARIANTS[:1]), (100.0, VARIANTS)):
+    for rpm, variants in rows:
         for what, factor in variants:
-            p = overrides("C1", what, factor)
-            t3, s3 = c1_spans(3, rpm, p)
+            p = overrides(name, what, factor)
+            t3, s3 = spans(name, 3, rpm, p, duration)
             cells = []
             for level in (1, 2):
-                t, s = c1_spans(level, rpm, p, torsional_wrap_statics=True)
+                t, s = spans(name, level, rpm, p, duration, torsional_wrap_statics=True)
                 cells.append(f"{100 * (t / t3 - 1):+5.1f} / {100 * (s / s3 - 1):+5.1f}%")
             label = what if what == "nominal" else f"{what} x{factor:g}"
             print(f"{rpm:4.0f} {label:24s} {t3:7.1f} / {s3:6.1f} {cells[0]:>16s} "
@@ -114,9 +93,9 @@ def main(argv):
     if what in ("both", "ring"):
         ring_table()
     if what in ("both", "running"):
-        running_table()
+        span_table("xu2010", [(rpm, VARIANTS) for rpm in SPEEDS], 0.6, "43.2 N m")
     if what == "c1":
-        c1_table()
+        span_table("C1", [(60.0, VARIANTS[:1]), (100.0, VARIANTS)], 1.2, "its preset load")
     print(f"wall {time.time() - t0:.0f} s")
 
 
