@@ -198,7 +198,7 @@ def _static_tension_at(level: int, drive: Drive, params: dict, pretension: float
     if pretension > 0 and pretension_error(drive, trial) is not None:
         return 0.0
     if level <= 2:   # the levels 0-2 share it
-        return static_span_tension(drive, trial, exact=exact)
+        return static_span_tension(drive, trial, exact=exact, fitted=False)
     return float(model_class(level)(drive, trial).static_tension())
 
 

@@ -358,3 +358,29 @@ def test_level2s_floor_holds_the_weight_once():
                                 ramp_time=0.3, duration=1.0, output_interval=1e-3, **ON)
         slack.append(r["slack_span.tension"][r.time > 0.8].mean())
     assert slack[1] == pytest.approx(slack[0], rel=2e-3)
+
+
+def test_the_fit_reads_no_damper_and_holds_the_scenes_static_tension():
+    """The fit is cached across the dampers and the fidelity (wrap_statics.STATIC_IGNORED):
+    its statics are taken at zero velocity and its linear modes undamped, so a damper's force,
+    c v, is zero in all of them. Computed afresh (caches cleared) with every damper x3 the
+    fit is the same to rounding. And a scene's static_tension, searched on level 3's static
+    tension alone (static_span_tension(fitted=False)), is what the fitted model holds at rest:
+    the fit's free length is chosen to hold it (the law at rest, a hyperbola's root)."""
+    from chainmodel.models import wrap_statics as W
+    sc = load_scene("C1", fidelity=1, **ON)
+    assert sc.static_tension is not None      # C1 names one
+
+    def fresh(params):
+        W._CACHE.clear()
+        fit = wrap_fit(sc.drive, params)
+        return np.array([v for k, v in vars(fit).items() if k != "solves_wall"])
+
+    dampers = [n for n in W.STATIC_IGNORED if n.endswith("damping") and n in sc.parameters
+               and isinstance(sc.parameters[n], float)]
+    assert len(dampers) >= 5
+    changed = dict(sc.parameters, **{n: 3.0 * sc.parameters[n] + 1e-3 for n in dampers})
+    np.testing.assert_allclose(fresh(changed), fresh(sc.parameters), rtol=1e-9)
+    W._CACHE.clear()
+    model = load_scene("C1", fidelity=1, **ON).model()
+    assert model.static_tension() == pytest.approx(sc.static_tension, rel=1e-6)

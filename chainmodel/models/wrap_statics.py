@@ -65,7 +65,7 @@ from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension", "weighted_static_tension",
            "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "fallbacks",
-           "note_fallback", "parameters_key"]
+           "note_fallback", "parameters_key", "STATIC_IGNORED"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -115,11 +115,20 @@ class WrapFit:
     mode: float = float("nan")
 
 
+#: parameters no fit reads: the statics and the linear modes are taken at zero velocity and
+#: undamped, so no damper acts; the fidelity and the breaking load (validity's) neither
+STATIC_IGNORED = frozenset(("fidelity", "chain.link_damping", "chain.joint_damping",
+                            "contact.damping", "driven.damping", "input_shaft.damping",
+                            "chain.breaking_load", "multibody.paper_damping"))
+
+
 def parameters_key(drive: Drive, params: Mapping[str, Any],
                    skip: tuple[str, ...] = ("solver.", "output", "torsional.", "modal.")):
     """A cache key of the drive and the parameters whose names do not start with ``skip``
-    (by default those level 3's statics do not read)."""
-    return (drive, tuple(sorted((k, v) for k, v in params.items() if not k.startswith(skip))))
+    (by default those level 3's statics do not read) and are not ``STATIC_IGNORED``: levels
+    0-2 of one drive, and a sweep over its dampers, share one fit."""
+    return (drive, tuple(sorted((k, v) for k, v in params.items()
+                                if not k.startswith(skip) and k not in STATIC_IGNORED)))
 
 
 
@@ -442,12 +451,23 @@ def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     return _CACHE[key]
 
 
-def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool = True) -> float:
+def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool = True,
+                        fitted: bool = True) -> float:
     """Levels 0-2's static span tension [N]: with ``torsional.wrap_statics`` the span law at
     rest on :func:`span_ends`' (c, f), floored (level 3's static tension by construction);
-    else :func:`weighted_static_tension` (``exact`` passed on)."""
+    else :func:`weighted_static_tension` (``exact`` passed on).
+
+    ``fitted=False`` with ``torsional.wrap_statics``: level 3's static tension itself
+    (:func:`sag_tension`, one static solve), which the fit holds by construction, without the
+    fit's load steps and linearisations (a scene's pretension search: its trials need only the
+    tension). Where the fit would then fail, the model holds the seat ladder's tension instead
+    and :func:`unavailable` says so."""
     if drive.links is None:
         return ST.static_span_tension(drive, params)
+    if params.get("torsional.wrap_statics") and not fitted:
+        t3 = sag_tension(drive, params)
+        if t3 is not None:
+            return t3
     if params.get("torsional.wrap_statics"):
         c, f, a = span_ends(drive, params)
         if unavailable(drive, params) is None:
