@@ -20,6 +20,9 @@ a flexible one: the two-inertia system with the shaft spring, the driven sprocke
     python docs/scripts/ringdown.py positions      # the linear modes at 8 driver positions in
                                                    # a tooth: level 3 (its static tension) and
                                                    # levels 1-2 on its wrap (a few seconds)
+    python docs/scripts/ringdown.py clearance      # xu2010 with its seat clearance x2: level
+                                                   # 3's ring against its linear modes at rest
+                                                   # (about 15 s)
 """
 
 from __future__ import annotations
@@ -149,9 +152,55 @@ def positions(count=8):
                   f"{w3 / (2 * math.pi):8.3f}  " + "  ".join(cells), flush=True)
 
 
+def clearance():
+    """xu2010 with its seat clearance x1 and x2 (trade_study.band_overrides): level 3's ring in
+    250-900 Hz against the start's speed, and its linearisation at rest at four driver positions
+    in a tooth (wrap_statics.ANGLES): the static tensions, the static condensation's modes, the
+    mode wrap_fit takes (its pick) and the continuation of the static condensation's other
+    (chain) mode with the span rollers' inertia kept."""
+    import math
+    from chainmodel.analysis.trade_study import band_overrides
+    from chainmodel.models import multibody_statics as MS
+    from chainmodel.models.wrap_statics import tooth_positions
+    base = load_scene("xu2010", fidelity=3)
+    for factor in (1.0, 2.0):
+        over = band_overrides(base, "seat_clearance", factor)
+        rings = [ring("xu2010", 3, (250.0, 900.0), rpm, parameters=over)[0]
+                 for rpm in (0.5, 1.0, 5.0)]
+        print(f"xu2010, seat clearance x{factor:g}: level 3's ring-down in 250-900 Hz at 0.5 / 1 "
+              f"/ 5 rpm: " + " / ".join(f"{f:.1f}" for f in rings) + " Hz", flush=True)
+        model = base.with_overrides(over, fidelity=3).model()
+        print("  position  tension up / low [N]  static condensation [Hz]  picked [Hz]  "
+              "the other, continued [Hz]")
+        for j, angle in enumerate(tooth_positions(model.drive)):
+            st = MS.static_state(model, angle)
+            captured = {}
+            original = MS._condensed_modes
+
+            def spy(k, mass, keep):
+                lam, phi = original(k, mass, keep)
+                if keep.size <= 2:
+                    captured["static"] = np.sqrt(np.abs(lam))
+                return lam, phi
+            MS._condensed_modes = spy
+            try:
+                picked, ws = MS.linear_driven_modes(model, st)
+            finally:
+                MS._condensed_modes = original
+            other = [w for w in captured["static"] if abs(w - ws) > 1e-9 * ws]
+            cont = (MS.linear_driven_modes(model, st, near=other[0])[0] if other
+                    else float("nan"))
+            statics = " / ".join(f"{w / (2 * math.pi):.1f}" for w in captured["static"])
+            print(f"  {j}/{len(tooth_positions(model.drive))}  {st.tension_upper:8.1f} / "
+                  f"{st.tension_lower:6.1f}  {statics:>24s}  {picked / (2 * math.pi):11.1f}  "
+                  f"{cont / (2 * math.pi):10.1f}", flush=True)
+
+
 def main(argv):
     if argv[1:2] == ["variants"]:
         return variants()
+    if argv[1:2] == ["clearance"]:
+        return clearance()
     if argv[1:2] == ["positions"]:
         return positions()
     if argv[1:2] == ["amplitude"]:
