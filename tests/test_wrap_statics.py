@@ -381,6 +381,16 @@ def test_the_fit_reads_no_damper_and_holds_the_scenes_static_tension():
     assert len(dampers) >= 5
     changed = dict(sc.parameters, **{n: 3.0 * sc.parameters[n] + 1e-3 for n in dampers})
     np.testing.assert_allclose(fresh(changed), fresh(sc.parameters), rtol=1e-9)
+    # level 2's own fit (its linear mode at rest, the modal damping included in the change)
+    from chainmodel.models import torsional_mode as TM
+    own = []
+    for extra in ({}, dict({n: changed[n] for n in dampers}, modal_damping_ratio=0.2)):
+        W._CACHE.clear()
+        TM._CACHE.clear()
+        own.append(TM.fitted_ends(load_scene("C1", fidelity=2, **ON, **{
+            k.replace(".", "_"): v for k, v in extra.items()}).model()))
+    assert own[0] is not None
+    np.testing.assert_allclose(own[1], own[0], rtol=1e-9)
     W._CACHE.clear()
     model = load_scene("C1", fidelity=1, **ON).model()
     assert model.static_tension() == pytest.approx(sc.static_tension, rel=1e-6)
