@@ -1,6 +1,7 @@
-"""The sprockets' mass matrix of levels 1-2 with the chain's inertia (docs/reduced_models.md,
-"chain inertia"), shared by :class:`~chainmodel.models.torsional.TorsionalModel` and the wrap's
-modal stiffness (:mod:`.wrap_statics`)."""
+"""The sprockets' two-inertia system of levels 1-2: their mass matrix with the chain's inertia
+(docs/reduced_models.md, "chain inertia") and their stiffness matrix on the spans, shared by
+:class:`~chainmodel.models.torsional.TorsionalModel` and the wrap's modal stiffness
+(:mod:`.wrap_statics`)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
-__all__ = ["reference_geometry", "sprocket_mass_matrix"]
+__all__ = ["reference_geometry", "sprocket_mass_matrix", "two_inertia_stiffness"]
 
 
 def reference_geometry(drive: Drive) -> dict[str, float]:
@@ -51,3 +52,12 @@ def sprocket_mass_matrix(drive: Drive, params: Mapping[str, Any],
         j22 += m * ro * ro * (r["wrapped_driven"] + 1 + ends)
         j12 += m * rc * ro * cross
     return np.array([[j11, j12], [j12, j22]])
+
+
+def two_inertia_stiffness(drive: Drive, params: Mapping[str, Any], k: float) -> np.ndarray:
+    """Stiffness matrix [N m/rad] of the sprocket rotations on spans of total stiffness ``k``
+    [N/m] pulling at the pitch radii, the input shaft's spring on the driver."""
+    rc, ro = drive.driver.pitch_radius, drive.driven.pitch_radius
+    K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
+    K[0, 0] += params["input_shaft.stiffness"]
+    return K

@@ -50,7 +50,7 @@ from ..geometry import Drive
 from ..kernels import rk4_loop as L
 from ..kernels import spans as S
 from . import limits
-from .chain_inertia import reference_geometry, sprocket_mass_matrix
+from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_stiffness
 from .wrap_statics import span_ends, span_sag_terms, static_span_tension, unavailable
@@ -367,11 +367,8 @@ class TorsionalModel(Model):
 
     def two_inertia_stiffness(self, k: float) -> np.ndarray:
         """Stiffness matrix [N m/rad] of the sprocket rotations on spans of total stiffness
-        ``k`` [N/m] pulling at the pitch radii, the input shaft's spring on the driver."""
-        rc, ro = self.drive.driver.pitch_radius, self.drive.driven.pitch_radius
-        K = k * np.array([[rc * rc, -rc * ro], [-rc * ro, ro * ro]])
-        K[0, 0] += self.params["input_shaft.stiffness"]
-        return K
+        ``k`` [N/m] (:func:`~chainmodel.models.chain_inertia.two_inertia_stiffness`)."""
+        return two_inertia_stiffness(self.drive, self.params, k)
 
     def sprocket_frequencies(self) -> np.ndarray:
         """Undamped natural frequencies of the linearised sprocket equations [rad/s] with the

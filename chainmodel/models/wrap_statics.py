@@ -60,7 +60,7 @@ from .. import parameters as PRM
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 from . import span_sag as SG
-from .chain_inertia import sprocket_mass_matrix
+from .chain_inertia import sprocket_mass_matrix, two_inertia_stiffness
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension", "weighted_static_tension",
@@ -500,21 +500,20 @@ def _slope(raw, b):
 
 def modal_stiffness(drive: Drive, params: Mapping[str, Any], omega: float) -> float:
     """K_m [N m/rad]: the driven sprocket's stiffness R_o^2 k at which levels 1-2's two-inertia
-    system (their sprocket mass matrix M, chain_inertia; the spans' stiffness k on the pitch
-    radii; the input shaft's spring k_s on the driver unless it is rigid) has a mode at
-    ``omega``. det(K - omega^2 M) = 0 is linear in k: with a = k_s - omega^2 M11,
-    b = -omega^2 M22, e = omega^2 M12, k = (e^2 - a b) / (R_c^2 b + R_o^2 a - 2 R_c R_o e);
-    rigid, k = omega^2 M22 / R_o^2. Raises ValueError where no positive k puts the driven
-    sprocket's mode there."""
+    system (:mod:`.chain_inertia`: their sprocket mass matrix M and stiffness matrix K(k) on
+    spans of stiffness k at the pitch radii, the input shaft's spring on the driver unless it
+    is rigid) has a mode at ``omega``. det(K(k) - omega^2 M) is linear in k (the spans' part of K
+    has rank one), so its root comes from two evaluations; rigid, k = omega^2 M22 / R_o^2.
+    Raises ValueError where no positive k puts the driven sprocket's mode there."""
     m = sprocket_mass_matrix(drive, params)
-    rc, ro = drive.driver.pitch_radius, drive.driven.pitch_radius
+    ro = drive.driven.pitch_radius
     w2 = omega * omega
-    if params["input_shaft.rigid"]:
-        k = w2 * m[1, 1] / (ro * ro)
-    else:
-        a = params["input_shaft.stiffness"] - w2 * m[0, 0]
-        b, e = -w2 * m[1, 1], w2 * m[0, 1]
-        k = (e * e - a * b) / (rc * rc * b + ro * ro * a - 2.0 * rc * ro * e)
+    k = w2 * m[1, 1] / (ro * ro)
+    if not params["input_shaft.rigid"]:
+        # the rigid root sets the scale of the second evaluation (no cancellation)
+        d0, d1 = (float(np.linalg.det(two_inertia_stiffness(drive, params, kk) - w2 * m))
+                  for kk in (0.0, k))
+        k = k * d0 / (d0 - d1)
     if not k > 0.0:
         raise ValueError(f"no span stiffness puts levels 1-2's driven mode at "
                          f"level 3's {omega / (2 * math.pi):.4g} Hz")
