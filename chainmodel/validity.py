@@ -131,10 +131,10 @@ def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
         return [Problem("wrap_statics_fallback", f"torsional.wrap_statics: {note}")
                 for note in fallbacks(drive, params, level)]
     return [Problem("wrap_statics_unavailable", (
-        f"torsional.wrap_statics = true was not honoured: level 3's statics of this drive found "
-        f"no equilibrium ({why}), so levels 0-2 hold their span ends with the seat ladder "
-        f"(torsional.seat_compliance) instead; run level 3, or a drive whose chain does not "
-        f"rest a roller on a tooth tip (docs/reduced_models.md)"))]
+        f"torsional.wrap_statics = true was not honoured: level 3's statics give this drive "
+        f"no wrap to fit ({why}), so levels 0-2 hold their span ends with the seat ladder "
+        f"(torsional.seat_compliance) and the catenary instead; run level 3 where the "
+        f"torsional mode matters (docs/reduced_models.md, \"Where the fit is refused\")"))]
 
 
 def _length_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:

@@ -80,6 +80,11 @@ MU_LOW, MU_HIGH = 0.25, 0.75
 #: the unseen 08A, 08B, 10A, 12A drives: 0.86-1.03); beyond it level 3's static tension is not
 #: the weight's doing
 SAG_RATIO = 2.0
+#: largest fitted end compliance per span, in units of the span's own elastic compliance
+#: (its links and loaded seats): beyond it the chain at rest is held by its sag or lifts off
+#: its seats, and ends linear from rest would not carry a load (:func:`_plausible`; measured
+#: on the drives the fit serves: 0.2-1.9, on a loose chain hanging at rest 2e4)
+END_RATIO = 10.0
 
 _CACHE: dict = {}
 #: why the fit failed, per (drive, parameters) key (:func:`unavailable`)
@@ -136,8 +141,22 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     """(c, f, T_0, K_3, ...) of this drive and parameters (module docstring); cached."""
     key = parameters_key(drive, params)
     hit = _CACHE.get(key)
+    if isinstance(hit, ValueError):     # refused before: level 3's statics are not redone
+        raise hit
     if hit is not None:
         return hit
+    try:
+        fit = _wrap_fit(drive, params, key)
+    except ValueError as exc:
+        _CACHE[key] = exc
+        raise
+    if len(_CACHE) > 256:
+        _CACHE.clear()
+    _CACHE[key] = fit
+    return fit
+
+
+def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
     # level 3 and its statics are imported when first needed: levels 0-2 import this module
     # and most of their runs never ask for them
     from .multibody import MultibodyModel
@@ -148,6 +167,9 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     t0 = rest.mean_tension
     ro = drive.driven.pitch_radius
     w = abs(p3["gravity"]) * p3["chain.link_mass"]
+    if not max(t0, w) > 0.0:
+        raise ValueError("the chain carries no tension at rest (no pretension, no weight), so "
+                         "its wrap has no stiffness at rest to fit")
     for share in (LOAD_STEP, 0.25 * LOAD_STEP, 0.05 * LOAD_STEP):
         # a smaller step where a roller at a tooth tip (where its contact ends) stalls Newton
         dm = share * max(t0, w) * ro
@@ -208,12 +230,8 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
         else:
             _FELL_BACK.pop((None,) + key, None)
     c, f, b = _ends(drive, p3, t0, slack3, km)
-    fit = WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
-                  float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
-    if len(_CACHE) > 256:
-        _CACHE.clear()
-    _CACHE[key] = fit
-    return fit
+    return WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
+                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
 
 
 def tooth_positions(drive: Drive) -> np.ndarray:
@@ -268,8 +286,30 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
         if slack3 is None or slack3 <= _split_slack(t0, 0.0, c, spans, dt):
             break
         b = _softness(t0, slack3, c, spans, dt)
+    _plausible(c, 0.5 * (n_up + n_low) / k + ST.seat_series_compliance(
+        dict(params, **{"torsional.seat_compliance": True}), drive)[0], stiffness)
     t0_lin = _linear(t0, b)
     return c, 0.5 * (x - t0_lin * (links / k + 2.0 * c)), b
+
+
+def _plausible(c: float, elastic: float, stiffness: float) -> None:
+    """ValueError unless the fitted end compliance c [m/N] is one of a wrap: not negative (a
+    series of seats, wrapped links and clearance) and at most ``END_RATIO`` times the span's
+    ``elastic`` compliance (its mean links and loaded seats). Outside, the gap between the
+    level's spans and level 3's mode at rest is not the wrap's: a chain stiffer at rest than
+    its links (a long span's sag law, very soft links), or one that hangs at rest, where ends
+    linear from rest would stretch the loaded span by metres."""
+    if c < 0.0:
+        raise ValueError(
+            f"level 3's driven-sprocket mode at rest (wrap stiffness {stiffness:.4g} N m/rad) "
+            f"is stiffer than this level's spans alone: it would take a negative end "
+            f"compliance ({c:.3g} m/N), so the gap is not the wrap's")
+    if c > END_RATIO * elastic:
+        raise ValueError(
+            f"level 3's driven-sprocket mode at rest (wrap stiffness {stiffness:.4g} N m/rad) "
+            f"would take span ends {c / elastic:.3g} times as compliant as the span's links "
+            f"and seats (more than {END_RATIO:g}): the chain at rest hangs on its sag or lifts "
+            f"off its seats, and ends linear from rest would not carry a load")
 
 
 def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
@@ -424,9 +464,10 @@ def note_fallback(level: int, drive: Drive, params: Mapping[str, Any],
 
 
 def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
-    """Why ``torsional.wrap_statics`` could not be honoured for this drive (level 3's statics
-    found no equilibrium when a level 0-2 model asked), or None; the model then held its span
-    ends with the seat ladder. chainmodel.validity turns it into a warning."""
+    """Why ``torsional.wrap_statics`` could not be honoured for this drive when a level 0-2
+    model asked (level 3's statics found no equilibrium, or the fit refused it: :func:`_plausible`
+    and a chain with no tension at rest), or None; the model then held its span ends with the
+    seat ladder. chainmodel.validity turns it into a warning."""
     if drive is None or drive.links is None or not params.get("torsional.wrap_statics"):
         return None
     return _FAILED.get(parameters_key(drive, params))
