@@ -220,7 +220,36 @@ def _tension_without_pretension(level: int, drive: Drive, params: dict, target: 
 
 @lru_cache(maxsize=128)
 def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) -> float:
-    """The chain.pretension at which ``level``'s own Model.static_tension() is ``target`` [N].
+    """The chain.pretension at which ``level``'s own Model.static_tension() is ``target`` [N]
+    (:func:`_search_pretension`). At levels 0-2 with ``torsional.wrap_statics`` the search
+    reads level 3's static tension alone; where the wrap fit then refuses the drive at the
+    pretension found (wrap_statics.unavailable), the model holds the seat ladder's tension, so
+    the search is redone on the ladder's."""
+    from .models.wrap_statics import static_span_tension, unavailable
+    params = dict(frozen)
+    x = _search_pretension(level, drive, params, target)
+    if level > 2 or drive.links is None or not params.get("torsional.wrap_statics"):
+        return x
+    trial = dict(params, **{"chain.pretension": x})
+    static_span_tension(drive, trial)           # the fit the model will take (cached)
+    if unavailable(drive, trial) is None:
+        return x
+    ladder = dict(params, **{"torsional.wrap_statics": False})
+    x = _search_pretension(level, drive, ladder, target)
+    trial = dict(params, **{"chain.pretension": x})
+    static_span_tension(drive, trial)
+    if unavailable(drive, trial) is None:
+        raise ValueError(
+            f"static_tension {target:g} N cannot be held at fidelity {level} with "
+            "torsional.wrap_statics: the wrap fit refuses this drive at the pretension level "
+            "3's statics ask for and accepts it at the seat ladder's; set "
+            "torsional.wrap_statics = false, or chain.pretension instead of static_tension")
+    return x
+
+
+def _search_pretension(level: int, drive: Drive, params: dict, target: float) -> float:
+    """The chain.pretension at which ``level``'s static tension (:func:`_static_tension_at`)
+    is ``target`` [N].
 
     T(pretension) is non-decreasing and piecewise affine wherever the chain is taut (the
     wrapped links' seats add a kink, level 3 its contacts): bracket the target, then regula
@@ -228,7 +257,6 @@ def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) ->
     centre distance gives alone, and one that needs more than the small-strain bound of
     chain.pretension."""
     from .models.kinematic import loose_chain_error
-    params = dict(frozen)
     t0 = _tension_without_pretension(level, drive, params, target)
     loose = loose_chain_error(drive, params) if target > t0 else None
     if loose is not None:
