@@ -52,7 +52,7 @@ from ..kernels import spans as S
 from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
-from .static_tension import seat_stiffness
+from .static_tension import seat_series_compliance, seat_stiffness
 from .wrap_statics import span_ends, span_sag_terms, static_span_tension, unavailable
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
@@ -337,11 +337,21 @@ class TorsionalModel(Model):
 
     def axial_frequency(self) -> float:
         """Lowest axial natural frequency [Hz] of the longer span (its largest link count over a
-        tooth period; the seats' series compliance at its ends): the mode levels 1-2 treat as
-        quasi-static (:func:`~chainmodel.models.limits.span_axial_frequency`)."""
+        tooth period; the seats' elastic series compliance at its ends): the mode levels 1-2
+        treat as quasi-static (:func:`~chainmodel.models.limits.span_axial_frequency`).
+
+        The ends are the loaded seats' (:func:`~chainmodel.models.static_tension.
+        seat_series_compliance`) also with ``torsional.wrap_statics``: the wrap fit's softer
+        ends at rest are mostly clearance taken up and sag, which the running load takes out of
+        the tight span (docs/stability.md, "Speed limits")."""
         r = self.reference
         n = math.ceil(max(r["n_up"], r["n_low"]) - 1e-9)
-        return limits.span_axial_frequency(n, self.params, self.series_compliance()[0])
+        return limits.span_axial_frequency(n, self.params, self.elastic_compliance())
+
+    def elastic_compliance(self) -> float:
+        """Compliance [m/N] per span of its loaded seats (the seat ladder, clearance taken up;
+        0 with ``torsional.seat_compliance`` off): what the speed limits read."""
+        return seat_series_compliance(self.params, self.drive)[0]
 
     def speed_limit(self) -> tuple[float, str]:
         """Levels 1-2 take the spans' axial motion as quasi-static (seed 004 section 5.3,
