@@ -394,3 +394,86 @@ def test_the_fit_reads_no_damper_and_holds_the_scenes_static_tension():
     W._CACHE.clear()
     model = load_scene("C1", fidelity=1, **ON).model()
     assert model.static_tension() == pytest.approx(sc.static_tension, rel=1e-6)
+
+
+# --- where the fit is refused (docs/reduced_models.md, "Where the fit is refused") ----------
+
+def _loose_xu2010(f):
+    """xu2010's 25/17 teeth at 11 span pitches and pitch fraction f, a chain one link longer
+    than its longest wrapping length: nowhere stretched, it hangs on its sag at rest."""
+    from chainmodel.geometry import Drive
+    from chainmodel.kinematics import wrap_length_range
+    p = 0.015875
+    d = Drive(25, 17, p, 11, f)
+    return dict(drive_driver_teeth=25, drive_driven_teeth=17,
+                drive_links=math.ceil(wrap_length_range(d)[2] / p),
+                drive_centre_distance=d.centre_distance)
+
+
+@pytest.mark.parametrize("level", [0, 1])
+def test_a_chain_hanging_at_rest_gets_no_wrap_fitted_at_rest(level):
+    """A loose chain hangs at rest with a few newtons; level 3's mode there is its sag's. Ends
+    linear from rest would have to be that soft and stretch the loaded span by metres (level 1
+    found no equilibrium under the 43.2 N.m load within 20 teeth). The fit is refused, the
+    seat ladder holds the ends, the result warns, and the loaded drive turns at the tooth ratio
+    (a span end is a series of springs: it cannot be more compliant than END_RATIO times the
+    span's links and seats and still carry the load in place)."""
+    from chainmodel.models import wrap_statics as W
+    r = chainmodel.simulate("xu2010", fidelity=level, duration=0.2, output_interval=2e-4,
+                            ramp_time=0.05, **_loose_xu2010(0.0), **ON)
+    found = [w for w in r.warnings if "torsional.wrap_statics = true was not honoured" in w]
+    assert len(found) == 1 and "hangs on its sag" in found[0], r.warnings
+    sc = r.scene
+    assert r.static_tension == pytest.approx(
+        W.weighted_static_tension(sc.drive, sc.parameters), rel=1e-9)
+    mask = r.time >= 0.1
+    turns1 = r["driver.angle"][mask][-1] - r["driver.angle"][mask][0]
+    turns2 = r["driven.angle"][mask][-1] - r["driven.angle"][mask][0]
+    # whole tooth periods are not guaranteed here: the polygon's ripple, at most a driven
+    # tooth's angle, bounds the error
+    assert abs(turns2 - turns1 * 25 / 17) < 2 * math.pi / 17
+
+
+def test_a_negative_end_compliance_is_refused():
+    """Links at a hundredth of their stiffness: level 3's mode at rest is stiffer than level
+    1's spans alone, so the fit would need ends of negative compliance (a spring in series
+    cannot stiffen the span). It is refused with that reason, not run."""
+    from chainmodel.models import wrap_statics as W
+    sc = load_scene("xu2010", fidelity=1, chain_link_stiffness=5.1e5, **ON)
+    with pytest.raises(ValueError, match="negative end compliance"):
+        W.wrap_fit(sc.drive, sc.parameters)
+    r = chainmodel.simulate(sc, load_torque=5.0, input_speed_rpm=40, duration=0.05,
+                            output_interval=1e-3)
+    assert any("negative end compliance" in w for w in r.warnings)
+
+
+def test_a_chain_with_no_tension_and_no_weight_is_refused_by_the_ladder_not_a_crash():
+    """No pretension and no gravity: the chain carries nothing at rest, so its wrap has no
+    stiffness to fit (was a ZeroDivisionError); level 2 then refuses the slack span, as it does
+    without the option."""
+    loose = chainmodel.Drive.from_links(25, 17, 0.015875, 46, tight_at="max")
+    with pytest.raises(ValueError, match="chain.pretension"):
+        chainmodel.simulate("xu2010", fidelity=2, duration=0.01, gravity=0.0,
+                            drive_centre_distance=loose.centre_distance, **ON)
+
+
+def test_a_refused_fit_still_holds_the_scenes_static_tension():
+    """The 21/63-tooth 16B scene at 500 N: the fit is refused there (level 3's lowest mode at
+    rest asks for ends 25 times its spans' compliance); the pretension search then solves on the
+    seat ladder's tension, so the model holds the 500 N the scene names, within the search's
+    tolerance (1e-6 relative)."""
+    sc = load_scene("fine", fidelity=1, **ON)
+    m = sc.model()
+    assert m.static_tension() == pytest.approx(500.0, rel=2e-6)
+    from chainmodel.models import wrap_statics as W
+    assert W.unavailable(sc.drive, sc.parameters) is not None
+
+
+@pytest.mark.parametrize("level", [0, 1, 2])
+def test_the_speed_limits_read_the_loaded_seats_with_or_without_the_fit(level):
+    """The levels' speed limits take the spans' axial mode on their links and loaded seats
+    (clearance taken up), with the fit as without it: the fit's ends at rest are softer by the
+    clearance the running load takes up (docs/stability.md, "Speed limits")."""
+    off = load_scene("xu2010", fidelity=level).model().speed_limit()
+    on = load_scene("xu2010", fidelity=level, **ON).model().speed_limit()
+    assert on[0] == pytest.approx(off[0], rel=1e-12)
