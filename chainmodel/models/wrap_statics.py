@@ -82,8 +82,9 @@ MU_LOW, MU_HIGH = 0.25, 0.75
 SAG_RATIO = 2.0
 #: largest fitted end compliance per span, in units of the span's own elastic compliance
 #: (its links and loaded seats): beyond it the chain at rest is held by its sag or lifts off
-#: its seats, and ends linear from rest would not carry a load (:func:`_plausible`; measured
-#: on the drives the fit serves: 0.2-1.9, on a loose chain hanging at rest 2e4)
+#: its seats, and ends linear from rest would not carry a load (:func:`_plausible`; measured:
+#: 0.008-2.6 on C1-C3, xu2010, the 08B fan slack or taut and the 6/9-tooth drive; 25 on the
+#: 21/63-tooth 16B scene ``fine``, 1.5e4 on a loose chain hanging at rest; docs/reduced_models.md)
 END_RATIO = 10.0
 
 _CACHE: dict = {}
