@@ -225,26 +225,29 @@ def _solve_pretension(level: int, drive: Drive, frozen: tuple, target: float) ->
     reads level 3's static tension alone; where the wrap fit then refuses the drive at the
     pretension found (wrap_statics.unavailable), the model holds the seat ladder's tension, so
     the search is redone on the ladder's."""
-    from .models.wrap_statics import static_span_tension, unavailable
     params = dict(frozen)
     x = _search_pretension(level, drive, params, target)
-    if level > 2 or drive.links is None or not params.get("torsional.wrap_statics"):
+    if (level > 2 or drive.links is None or not params.get("torsional.wrap_statics")
+            or not _wrap_refused(drive, params, x)):
         return x
-    trial = dict(params, **{"chain.pretension": x})
-    static_span_tension(drive, trial)           # the fit the model will take (cached)
-    if unavailable(drive, trial) is None:
-        return x
-    ladder = dict(params, **{"torsional.wrap_statics": False})
-    x = _search_pretension(level, drive, ladder, target)
-    trial = dict(params, **{"chain.pretension": x})
-    static_span_tension(drive, trial)
-    if unavailable(drive, trial) is None:
+    x = _search_pretension(level, drive, dict(params, **{"torsional.wrap_statics": False}),
+                           target)
+    if not _wrap_refused(drive, params, x):
         raise ValueError(
             f"static_tension {target:g} N cannot be held at fidelity {level} with "
             "torsional.wrap_statics: the wrap fit refuses this drive at the pretension level "
             "3's statics ask for and accepts it at the seat ladder's; set "
             "torsional.wrap_statics = false, or chain.pretension instead of static_tension")
     return x
+
+
+def _wrap_refused(drive: Drive, params: dict, pretension: float) -> bool:
+    """Whether the wrap fit refuses this drive at ``pretension`` (fitting it, cached, as the
+    model will)."""
+    from .models.wrap_statics import static_span_tension, unavailable
+    trial = dict(params, **{"chain.pretension": pretension})
+    static_span_tension(drive, trial)
+    return unavailable(drive, trial) is not None
 
 
 def _search_pretension(level: int, drive: Drive, params: dict, target: float) -> float:

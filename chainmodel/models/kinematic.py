@@ -93,7 +93,7 @@ class KinematicModel(Model):
             # the loaded seats' elastic ends (TorsionalModel.axial_frequency), so no wrap fit
             m1 = TorsionalModel(self.drive, dict(p, **{"input_shaft.rigid": True,
                                                        "torsional.wrap_statics": False}))
-            r, c = m1.reference, m1.elastic_compliance()
+            r, c = m1.reference, m1.loaded_seat_compliance()
             j22 = float(m1.mass_matrix()[1, 1])
             n_up, n_low = r["n_up_min"], r["n_low_min"]
             f_ax = m1.axial_frequency()

@@ -346,9 +346,9 @@ class TorsionalModel(Model):
         the tight span (docs/stability.md, "Speed limits")."""
         r = self.reference
         n = math.ceil(max(r["n_up"], r["n_low"]) - 1e-9)
-        return limits.span_axial_frequency(n, self.params, self.elastic_compliance())
+        return limits.span_axial_frequency(n, self.params, self.loaded_seat_compliance())
 
-    def elastic_compliance(self) -> float:
+    def loaded_seat_compliance(self) -> float:
         """Compliance [m/N] per span of its loaded seats (the seat ladder, clearance taken up;
         0 with ``torsional.seat_compliance`` off): what the speed limits read."""
         return seat_series_compliance(self.params, self.drive)[0]

@@ -65,7 +65,8 @@ from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension", "weighted_static_tension",
            "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "fallbacks",
-           "note_fallback", "parameters_key", "STATIC_IGNORED"]
+           "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
+           "span_elastic_compliance"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -149,11 +150,12 @@ def wrap_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit:
     try:
         fit = _wrap_fit(drive, params, key)
     except ValueError as exc:
-        _CACHE[key] = exc
-        raise
+        fit = exc
     if len(_CACHE) > 256:
         _CACHE.clear()
     _CACHE[key] = fit
+    if isinstance(fit, ValueError):
+        raise fit
     return fit
 
 
@@ -287,10 +289,21 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
         if slack3 is None or slack3 <= _split_slack(t0, 0.0, c, spans, dt):
             break
         b = _softness(t0, slack3, c, spans, dt)
-    _plausible(c, 0.5 * (n_up + n_low) / k + ST.seat_series_compliance(
-        dict(params, **{"torsional.seat_compliance": True}), drive)[0], stiffness)
+    _plausible(c, span_elastic_compliance(drive, params), stiffness)
     t0_lin = _linear(t0, b)
     return c, 0.5 * (x - t0_lin * (links / k + 2.0 * c)), b
+
+
+def span_elastic_compliance(drive: Drive, params: Mapping[str, Any]) -> float:
+    """A span's elastic compliance [m/N]: its tooth-period mean link count / k plus the seat
+    ladder's loaded seats at both ends (clearance taken up), whatever
+    ``torsional.seat_compliance`` says (a real wrap has seats): the yardstick of
+    :func:`_plausible`."""
+    g = tooth_period_geometry(drive, 100)
+    n = 0.5 * (float(np.mean(g.upper_links)) + float(np.mean(g.lower_links)))
+    seats = ST.seat_series_compliance(dict(params, **{"torsional.seat_compliance": True}),
+                                      drive)[0]
+    return n / params["chain.link_stiffness"] + seats
 
 
 def _plausible(c: float, elastic: float, stiffness: float) -> None:

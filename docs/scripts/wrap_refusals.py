@@ -12,15 +12,11 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
 import chainmodel.models.wrap_statics as W  # noqa: E402
-from chainmodel.kinematics.wrapping import tooth_period_geometry  # noqa: E402
-from chainmodel.models import static_tension as ST  # noqa: E402
 from chainmodel.models.span_sag import normal_weights  # noqa: E402
 from chainmodel.scene import load_scene  # noqa: E402
 from test_extremes import drive_overrides  # noqa: E402
@@ -55,10 +51,7 @@ print("|---|---|---|---|---|---|---|---|")
 for label, name, kw in cases():
     sc = load_scene(name, fidelity=1, torsional_wrap_statics=True, **kw)
     d, p = sc.drive, sc.parameters
-    g = tooth_period_geometry(d, 100)
-    n = 0.5 * (np.mean(g.upper_links) + np.mean(g.lower_links))
-    elastic = n / p["chain.link_stiffness"] + ST.seat_series_compliance(
-        dict(p, **{"torsional.seat_compliance": True}), d)[0]
+    elastic = W.span_elastic_compliance(d, p)
     try:
         f = W.wrap_fit(d, p)
     except ValueError as exc:
