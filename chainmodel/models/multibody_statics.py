@@ -48,7 +48,14 @@ from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes"]
+__all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes",
+           "linearised_modes", "mode_measures", "SHARE_GATE"]
+
+#: linear_driven_modes takes the driven-sprocket mode among the modes whose share of the
+#: driven sprocket's rotation in their kinetic energy is at least this times the largest
+#: (C3: the string mode at 7.67 Hz has 0.07 of the 16.31 Hz mode's share; xu2010's shaft mode
+#: 0.65 of its 601 Hz mode's, a sagging 08B chain's 209 Hz mode 0.70 of the largest)
+SHARE_GATE = 0.5
 
 #: relative force tolerance (of the weight per roller) of a converged solution
 TOLERANCE = 1e-3
@@ -379,6 +386,33 @@ def _condensed_modes(k, mass, keep):
     return lam, T @ vec
 
 
+def mode_measures(lam, phi, mass, driven: int, ref) -> tuple[np.ndarray, np.ndarray]:
+    """(share, mac) per mode: J_2 phi_2^2 / (phi^T M phi), the share of the driven sprocket's
+    rotation (coordinate ``driven``) in the mode's kinetic energy (phi_2^2 of the
+    mass-normalised shape is its driving-point residue), and the mass-weighted modal assurance
+    criterion against ``ref`` (Allemang & Brown 1982); both -1 where ``lam`` <= 0."""
+    norm = np.einsum("i,ij,ij->j", mass, phi, phi)
+    share = np.where(lam > 0.0, mass[driven] * phi[driven] ** 2 / norm, -1.0)
+    mac = np.where(lam > 0.0, (phi.T @ (mass * ref)) ** 2 / (norm * (ref @ (mass * ref))), -1.0)
+    return share, mac
+
+
+def _driven_mode(lam, phi, mass, driven: int, ref, near=None) -> int:
+    """Index of the driven-sprocket mode: of the positive modes whose share
+    (:func:`mode_measures`) is at least ``SHARE_GATE`` times the largest, the one with the
+    largest MAC against ``ref``, or with ``near`` [rad/s] the one nearest ``near``. ValueError
+    where no positive mode turns the driven sprocket."""
+    share, mac = mode_measures(lam, phi, mass, driven, ref)
+    best = int(np.argmax(share))
+    if not share[best] > 0.0:
+        raise ValueError("level 3 linearised at rest has no positive mode in the driven "
+                         "sprocket")
+    gated = np.flatnonzero(share >= SHARE_GATE * share[best])
+    if near is not None:
+        return int(gated[np.argmin(np.abs(np.log(np.sqrt(lam[gated]) / near)))])
+    return int(gated[np.argmax(mac[gated])])
+
+
 def linear_driven_modes(model, solution: StaticSolution, near: float | None = None
                         ) -> tuple[float, float]:
     """(omega, omega_s) [rad/s]: level 3's driven-sprocket mode about a static equilibrium
@@ -397,21 +431,41 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     each roller follows its static shape, T = [I; -K_rr^-1 K_rs], and carries its mass
     through it); of its modes (two where the driver is free) the one with the largest share of
     its kinetic energy in the driven sprocket and its seated rollers. That is the static
-    wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they turn with their
-    sprocket as levels 1-2's chain inertia puts them on it - and the span rollers keep their
-    inertia: at xu2010's 600 Hz, ten times a span's first string mode, they do not follow their
-    static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every roller's inertia, 601.5 Hz
-    so, 568.4 Hz with none), and on a sagging chain the static secant is its sag's, which a span
-    above its string modes does not give. The mode returned is this model's mode with the
-    largest mass-weighted modal assurance criterion against the static one's shape (the same
-    mode, moved by the spans' inertia; Allemang & Brown, 1982). Condensing the seated rollers
-    also removes the local modes of a light sprocket rattling against its own rollers at kHz.
-    ``near`` [rad/s]: take the static condensation's mode nearest this omega_s instead (the
-    same mode at another driver position, where the shares of a flexible shaft's two modes may
+    wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
+    turn with their sprocket as levels 1-2's chain inertia puts them on it - and the span
+    rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
+    they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
+    roller's inertia, 601.5 Hz so, 568.4 Hz with none), and on a sagging chain the static
+    secant is its sag's, which a span above its string modes does not give. The mode returned
+    is, of this model's modes that turn the driven sprocket (a share J_2 phi_2^2 / (phi^T M
+    phi) of their kinetic energy at least ``SHARE_GATE`` times the largest; phi_2^2 of the
+    mass-normalised shape is the mode's driving-point residue), the one with the largest
+    mass-weighted modal assurance criterion against the static one's shape (the same mode,
+    moved by the spans' inertia; Allemang & Brown, 1982). Without the gate, on a long sagging
+    span, whose static shape is mostly its sag's, the closest shape was a string mode that
+    hardly turns the sprocket (C3: 7.67 Hz with 6 % of its energy in the driven sprocket,
+    against 16.31 Hz with 91 %; the 21/63-tooth ``fine``: 7.76 Hz, 0.3 %, against 45.4 Hz, 71
+    %; level 3's own ring-down: 14.8-17.2 Hz and 45.3-45.5 Hz; docs/reduced_models.md "Which
+    mode is the driven sprocket's"). Without the MAC, the largest share alone took a mode
+    level 3's ring-down does not show on a sagging 08B chain (567 Hz, against its 209 Hz).
+    Condensing the seated rollers also removes the local modes of a light sprocket rattling
+    against its own rollers at kHz.
+    ``near`` [rad/s]: take, of the gated modes, the one nearest this omega instead (the same
+    mode at another driver position, where the shares of a flexible shaft's two modes may
     swap: xu2010 with half its contact stiffness).
     Checked against level 3's own ring-down on C1, xu2010 and unseen drives
     (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
     static stiffness is singular or no positive mode exists."""
+    lam, phi, mass, driven, ref, omega_s = linearised_modes(model, solution)
+    i = _driven_mode(lam, phi, mass, driven, ref, near)
+    return math.sqrt(lam[i]), omega_s
+
+
+def linearised_modes(model, solution: StaticSolution):
+    """(lam [rad^2/s^2], shapes, mass, driven, ref, omega_s [rad/s]) of
+    :func:`linear_driven_modes`: the modes of level 3 linearised at ``solution`` with its
+    seated rollers condensed, the coordinates' masses, the driven sprocket's coordinate, the
+    static condensation's driven-sprocket shape and its mode; for :func:`mode_measures`."""
     n = 2 + 2 * model.M
     P = model.P
     q0 = solution.state[:n].astype(float)
@@ -441,27 +495,18 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
                            np.full(n - 2, p["chain.link_mass"])])[free]
     k = -mass[:, None] * A
     k = 0.5 * (k + k.T)
-    driven = np.flatnonzero(side == 2)
+    driven = int(np.flatnonzero(free == 1)[0])
     sprockets = np.flatnonzero(free < 2)
     spans = np.flatnonzero(side == 0)
-    # the static condensation's driven-sprocket mode (the largest share of its kinetic energy
-    # in the driven sprocket and its seated rollers)
+    # the static condensation's driven-sprocket mode: the largest share of its kinetic energy
+    # in the driven sprocket and its seated rollers
     lam_s, phi_s = _condensed_modes(k, mass, sprockets)
+    seated = np.flatnonzero(side == 2)
     energy = mass[:, None] * phi_s * phi_s
-    share_s = np.where(lam_s > 0.0, energy[driven].sum(axis=0) / energy.sum(axis=0), -1.0)
+    share_s = np.where(lam_s > 0.0, energy[seated].sum(axis=0) / energy.sum(axis=0), -1.0)
     j = int(np.argmax(share_s))
-    if near is not None and share_s[j] > 0.0:
-        positive = np.flatnonzero(lam_s > 0.0)
-        j = int(positive[np.argmin(np.abs(np.log(np.sqrt(lam_s[positive]) / near)))])
     if share_s[j] <= 0.0:
         raise ValueError("level 3's static condensation has no positive driven-sprocket mode")
-    ref = phi_s[:, j]
-    # the span rollers' inertia kept: the mode that continues it (largest mass-weighted MAC
-    # with its shape; Allemang & Brown 1982)
     lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
-    try:
-        i = closest_mode(lam, phi, mass, ref)
-    except ValueError:
-        raise ValueError("level 3 linearised at rest has no positive mode in the driven "
-                         "sprocket") from None
-    return math.sqrt(lam[i]), math.sqrt(lam_s[j])
+    return lam, phi, mass, driven, phi_s[:, j], math.sqrt(lam_s[j])
+

@@ -84,8 +84,8 @@ SAG_RATIO = 2.0
 #: largest fitted end compliance per span, in units of the span's own elastic compliance
 #: (its links and loaded seats): beyond it the chain at rest is held by its sag or lifts off
 #: its seats, and ends linear from rest would not carry a load (:func:`_plausible`; measured:
-#: 0.008-2.6 on C1-C3, xu2010, the 08B fan slack or taut and the 6/9-tooth drive; 25 on the
-#: 21/63-tooth 16B scene ``fine``, 1.5e4 on a loose chain hanging at rest; docs/reduced_models.md)
+#: 0.008-1.8 on C1, C2, xu2010, the 08B fan slack or taut, the 9/6 and 120/12-tooth drives,
+#: 8.7 on the 6/9-tooth drive; 1.5e4 on a loose chain hanging at rest; docs/reduced_models.md)
 END_RATIO = 10.0
 
 _CACHE: dict = {}
@@ -249,14 +249,14 @@ def _tooth_mean_mode(model, rests) -> tuple[float, int]:
     positions of ``rests`` and the ones of ``ANGLES`` with no equilibrium; ValueError where
     the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
     stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
-    see the chain's tooth-period mean. The mode at the other positions continues the static
-    condensation's mode nearest angle 0's (``near``)."""
+    see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
+    those with a comparable share in the driven sprocket (``near``)."""
     from .multibody_statics import linear_driven_modes
-    omega, static = linear_driven_modes(model, rests[0])
+    omega = linear_driven_modes(model, rests[0])[0]
     omegas = [omega]
     for rest in rests[1:]:
         try:
-            omegas.append(linear_driven_modes(model, rest, near=static)[0])
+            omegas.append(linear_driven_modes(model, rest, near=omega)[0])
         except ValueError:
             pass
     return float(np.mean(omegas)), ANGLES - len(omegas)
@@ -289,8 +289,11 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
         if slack3 is None or slack3 <= _split_slack(t0, 0.0, c, spans, dt):
             break
         b = _softness(t0, slack3, c, spans, dt)
-    _plausible(c, span_elastic_compliance(drive, params), stiffness)
     t0_lin = _linear(t0, b)
+    # the floor is the cause where the spans without it would take non-negative ends
+    by_floor = c < 0.0 < b and _compliance(target, n_up, n_low, k, 1.0, 1.0) >= 0.0
+    _plausible(c, span_elastic_compliance(drive, params), stiffness,
+               _slope(t0_lin, b) if by_floor else 1.0)
     return c, 0.5 * (x - t0_lin * (links / k + 2.0 * c)), b
 
 
@@ -306,17 +309,24 @@ def span_elastic_compliance(drive: Drive, params: Mapping[str, Any]) -> float:
     return n / params["chain.link_stiffness"] + seats
 
 
-def _plausible(c: float, elastic: float, stiffness: float) -> None:
+def _plausible(c: float, elastic: float, stiffness: float, slope: float = 1.0) -> None:
     """ValueError unless the fitted end compliance c [m/N] is one of a wrap: not negative (a
     series of seats, wrapped links and clearance) and at most ``END_RATIO`` times the span's
     ``elastic`` compliance (its mean links and loaded seats). Outside, the gap between the
     level's spans and level 3's mode at rest is not the wrap's: a chain stiffer at rest than
-    its links (a long span's sag law, very soft links), or one that hangs at rest, where ends
-    linear from rest would stretch the loaded span by metres."""
+    its links (very soft links), a long sagging span whose floor (``slope`` dT / dT_raw at rest
+    below 1, given where the spans without the floor would take ends of non-negative
+    compliance) softens the spans at rest more than the mode allows - the slack span's static
+    sag and a torsional mode above the spans' string modes, which one span law does not hold
+    (C3, ``fine``: docs/reduced_models.md) - or a chain that hangs at rest, where ends linear
+    from rest would stretch the loaded span by metres."""
     if c < 0.0:
+        why = (f", with the floor fitted to level 3's slack span under load taking the spans' "
+               f"slope at rest to {slope:.3g} (a long sagging span: its static sag and its "
+               f"mode above the string modes do not fit one span law)" if slope < 0.999 else "")
         raise ValueError(
             f"level 3's driven-sprocket mode at rest (wrap stiffness {stiffness:.4g} N m/rad) "
-            f"is stiffer than this level's spans alone: it would take a negative end "
+            f"is stiffer than this level's spans alone{why}: it would take a negative end "
             f"compliance ({c:.3g} m/N), so the gap is not the wrap's")
     if c > END_RATIO * elastic:
         raise ValueError(
