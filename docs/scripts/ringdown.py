@@ -20,6 +20,10 @@ a flexible one: the two-inertia system with the shaft spring, the driven sprocke
     python docs/scripts/ringdown.py positions      # the linear modes at 8 driver positions in
                                                    # a tooth: level 3 (its static tension) and
                                                    # levels 1-2 on its wrap (a few seconds)
+    python docs/scripts/ringdown.py modes          # which linear mode is the driven
+                                                   # sprocket's: C1, C3, fine, xu2010 and
+                                                   # a sagging 08B chain, each mode's share
+                                                   # and MAC, level 3's ring (under a minute)
     python docs/scripts/ringdown.py clearance      # xu2010 with its seat clearance x2: level
                                                    # 3's ring against its linear modes at rest
                                                    # (about 15 s)
@@ -143,7 +147,7 @@ def positions(count=8):
             angle = 2.0 * math.pi / m3.drive.n_driver * j / count
             st = static_state(m3, angle)
             w3, ws = linear_driven_modes(m3, st, near=near)
-            near = near or ws
+            near = near or w3
             cells = []
             for level, (m, shape) in levels.items():
                 w, ranks[level] = TM.driven_mode(m, shape, angle, ranks.get(level))
@@ -196,7 +200,42 @@ def clearance():
                   f"{cont / (2 * math.pi):10.1f}", flush=True)
 
 
+def modes():
+    """Level 3 linearised at rest (multibody_statics.linearised_modes): every mode with at
+    least 2 % of its kinetic energy in the driven sprocket's rotation or a MAC of 0.1 against
+    the static wrap's shape, the mode linear_driven_modes takes, the spans' first string mode
+    (1 / 2L) sqrt(T_0 / rho), and level 3's ring-down after a sudden start to 1 and 5 rpm within
+    0.6-1.4 x the mode taken (docs/reduced_models.md, "Which mode is the driven sprocket's")."""
+    import math
+    from chainmodel.models import multibody_statics as MS
+    import tempfile
+    from chainmodel.models.span_sag import normal_weights
+    from test_wrap_statics import _SAGGING_08B    # the tests' sagging 08B 13/39 drive
+    sagging = Path(tempfile.mkdtemp()) / "sagging_08b.toml"
+    sagging.write_text(_SAGGING_08B)
+    for name in ("C1", "C3", "fine", "xu2010", str(sagging)):
+        model = load_scene(name, fidelity=3).model()
+        rest = MS.static_state(model)
+        lam, phi, mass, driven, ref, omega_s = MS.linearised_modes(model, rest)
+        share, mac = MS.mode_measures(lam, phi, mass, driven, ref)
+        taken = MS.linear_driven_modes(model, rest)[0]
+        d, p = model.drive, model.params
+        span = normal_weights(d, p)[0][1]
+        string = math.sqrt(rest.mean_tension / (p["chain.link_mass"] / d.pitch)) / (2.0 * span)
+        band = (0.6 * taken / (2 * math.pi), 1.4 * taken / (2 * math.pi))
+        rings = " / ".join(f"{ring(name, 3, band, rpm)[0]:.2f}" for rpm in (1.0, 5.0))
+        print(f"{Path(name).stem}: T_0 {rest.mean_tension:.1f} N, first string mode "
+              f"{string:.2f} Hz, static condensation {omega_s / (2 * math.pi):.2f} Hz, level 3's "
+              f"ring at 1 / 5 rpm {rings} Hz")
+        for i in np.flatnonzero((share > 0.02) | (mac > 0.1)):
+            tag = "  <- taken" if abs(math.sqrt(lam[i]) - taken) < 1e-9 * taken else ""
+            print(f"  {math.sqrt(lam[i]) / (2 * math.pi):9.2f} Hz  share {share[i]:.3f}  "
+                  f"MAC {mac[i]:.3f}{tag}", flush=True)
+
+
 def main(argv):
+    if argv[1:2] == ["modes"]:
+        return modes()
     if argv[1:2] == ["variants"]:
         return variants()
     if argv[1:2] == ["clearance"]:

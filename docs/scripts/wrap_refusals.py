@@ -55,7 +55,10 @@ for label, name, kw in cases():
     try:
         f = W.wrap_fit(d, p)
     except ValueError as exc:
-        print(f"| {label} | - | {elastic:.3g} | - | - | - | - | refused: {str(exc)[:60]}... |")
+        why = ("a negative end compliance" + (", at the floor's slope" if "floor" in str(exc)
+                                              else "")
+               if "negative end compliance" in str(exc) else str(exc)[:60] + "...")
+        print(f"| {label} | - | {elastic:.3g} | - | - | - | - | refused: {why} |")
         continue
     rho = p["chain.link_mass"] / d.pitch
     span = normal_weights(d, p)[0][1]
