@@ -232,7 +232,8 @@ def test_on_long_sagging_spans_the_mode_is_the_driven_sprockets_not_a_string_mod
     the seat ladder), and not a mode near the spans' first string mode (1 / 2L) sqrt(T_0 /
     rho), whose shape is nearest the static wrap's (mostly the spans' sag) but which hardly
     turns the sprocket (the pick before the share gate: 7.7 Hz on both). C3 within 6 %:
-    level 3's ring there moves with the amplitude (17.1 Hz at 0.5-1 rpm, 15.2 Hz at 5 rpm)."""
+    level 3's ring there moves with the amplitude (16.1 / 14.5 Hz at 1 / 5 rpm: docs/scripts/
+    ringdown.py modes)."""
     from chainmodel.models.multibody_statics import linear_driven_modes
     m3 = load_scene(name, fidelity=3).model()
     rest = static_state(m3)

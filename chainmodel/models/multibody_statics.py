@@ -46,7 +46,6 @@ from ..kernels import multibody_layout as K
 from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
-from .modal_assurance import closest_mode
 
 __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes",
            "linearised_modes", "mode_measures", "SHARE_GATE"]
@@ -445,7 +444,7 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     span, whose static shape is mostly its sag's, the closest shape was a string mode that
     hardly turns the sprocket (C3: 7.67 Hz with 6 % of its energy in the driven sprocket,
     against 16.31 Hz with 91 %; the 21/63-tooth ``fine``: 7.76 Hz, 0.3 %, against 45.4 Hz, 71
-    %; level 3's own ring-down: 14.8-17.2 Hz and 45.3-45.5 Hz; docs/reduced_models.md "Which
+    %; level 3's own ring-down: 14.5-16.1 Hz and 45.6 Hz; docs/reduced_models.md "Which
     mode is the driven sprocket's"). Without the MAC, the largest share alone took a mode
     level 3's ring-down does not show on a sagging 08B chain (567 Hz, against its 209 Hz).
     Condensing the seated rollers also removes the local modes of a light sprocket rattling
