@@ -226,7 +226,7 @@ def test_sagging_drive_mode_is_level3s_ring_down(tmp_path):
 
 @pytest.mark.parametrize("name, tol", [("fine", 0.03), ("C3", 0.06)])
 def test_on_long_sagging_spans_the_mode_is_the_driven_sprockets_not_a_string_mode(name, tol):
-    """The 21/63-tooth 16B scene ``fine`` and C3 (0.88-0.90 m spans at 500 N): level 3
+    """The 21/63-tooth 16B scene ``fine`` and C3 (0.895 / 0.876 m spans at 500 N): level 3
     linearised at rest takes the driven sprocket's mode, the one level 3's own ring-down shows
     (sudden start to 1 rpm, the strongest peak within 0.6-1.4 x the two-inertia estimate on
     the seat ladder), and not a mode near the spans' first string mode (1 / 2L) sqrt(T_0 /

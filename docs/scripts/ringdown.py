@@ -213,8 +213,13 @@ def modes():
     from test_wrap_statics import _SAGGING_08B    # the tests' sagging 08B 13/39 drive
     sagging = Path(tempfile.mkdtemp()) / "sagging_08b.toml"
     sagging.write_text(_SAGGING_08B)
-    for name in ("C1", "C3", "fine", "xu2010", str(sagging)):
-        model = load_scene(name, fidelity=3).model()
+    from chainmodel.analysis.trade_study import band_overrides
+    xu = load_scene("xu2010", fidelity=3)
+    cases = [(n, n, {}) for n in ("C1", "C3", "fine", "xu2010")] + [
+        ("xu2010, seat clearance x2", "xu2010", band_overrides(xu, "seat_clearance", 2.0)),
+        ("sagging 08B 13/39", str(sagging), {})]
+    for label, name, over in cases:
+        model = load_scene(name, fidelity=3).with_overrides(over, fidelity=3).model()
         rest = MS.static_state(model)
         lam, phi, mass, driven, ref, omega_s = MS.linearised_modes(model, rest)
         share, mac = MS.mode_measures(lam, phi, mass, driven, ref)
@@ -223,8 +228,9 @@ def modes():
         span = normal_weights(d, p)[0][1]
         string = math.sqrt(rest.mean_tension / (p["chain.link_mass"] / d.pitch)) / (2.0 * span)
         band = (0.6 * taken / (2 * math.pi), 1.4 * taken / (2 * math.pi))
-        rings = " / ".join(f"{ring(name, 3, band, rpm)[0]:.2f}" for rpm in (1.0, 5.0))
-        print(f"{Path(name).stem}: T_0 {rest.mean_tension:.1f} N, first string mode "
+        rings = " / ".join(f"{ring(name, 3, band, rpm, parameters=over)[0]:.2f}"
+                           for rpm in (1.0, 5.0))
+        print(f"{label}: spans {span:.3f} m, T_0 {rest.mean_tension:.1f} N, first string mode "
               f"{string:.2f} Hz, static condensation {omega_s / (2 * math.pi):.2f} Hz, level 3's "
               f"ring at 1 / 5 rpm {rings} Hz")
         for i in np.flatnonzero((share > 0.02) | (mac > 0.1)):

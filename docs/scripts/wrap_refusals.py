@@ -9,6 +9,7 @@ The ratio is printed for refused drives too: the gate is lifted for this table (
 to infinity in this process only); a negative c prints as refused.
 """
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -55,9 +56,12 @@ for label, name, kw in cases():
     try:
         f = W.wrap_fit(d, p)
     except ValueError as exc:
-        why = ("a negative end compliance" + (", at the floor's slope" if "floor" in str(exc)
-                                              else "")
-               if "negative end compliance" in str(exc) else str(exc)[:60] + "...")
+        text = str(exc)
+        c = re.search(r"negative end compliance \((\S+) m/N\)", text)
+        slope = re.search(r"slope at rest to (\S+) ", text)
+        why = (f"a negative end compliance ({c.group(1)} m/N)"
+               + (f", at the floor's slope {slope.group(1)}" if slope else "")
+               if c else text[:60] + "...")
         print(f"| {label} | - | {elastic:.3g} | - | - | - | - | refused: {why} |")
         continue
     rho = p["chain.link_mass"] / d.pitch
