@@ -219,20 +219,22 @@ PARAMETERS: tuple[Parameter, ...] = (
        "pitch radius, each span as a bar moving with its endpoints (consistent mass matrix); "
        "off gives seed 004 eq 50 exactly (docs/reduced_models.md)", kind=bool, levels=(1, 2)),
     _p("torsional.seat_compliance", True, "",
+       "with torsional.wrap_statics off (or where its fit is refused): "
        "put the seated rollers' contact compliance in series with each span at levels 0-2 "
        "(level 0: in its static tension only): "
        "each span end adds 1/K_seat, K_seat = (k_c + sqrt(k_c^2 + 4 k_c k_link)) / 2 (a ladder "
        "of seat springs contact.stiffness and links, loaded by the span's tension less the "
        "wrapped links' own), plus the roller-seat clearance (docs/reduced_models.md)",
        kind=bool, levels=(0, 1, 2)),
-    _p("torsional.wrap_statics", False, "",
+    _p("torsional.wrap_statics", True, "",
        "at levels 0-2 take each span end's compliance, free length and a floor under the slack "
        "span from level 3 of the same drive (its rollers, links, seats with clearance and "
        "flanks, gravity): the static tension is level 3's static equilibrium's, the driven "
        "sprocket's torsional mode of each level linearised at rest level 3's linear one (its "
        "statics and span rollers' inertia; their means over a driver tooth period) "
        "and the loaded split at rest follows level 3's statics (docs/reduced_models.md, \"One "
-       "wrap\"); off, "
+       "wrap\"); where level 3's statics give no wrap to fit (a chain hanging on its sag, a "
+       "negative end compliance) the result warns and the seat ladder holds the ends; off, "
        "torsional.seat_compliance decides and the spans' weight adds the elastic catenary's "
        "sag tension (docs/reduced_models.md, \"One static tension\")", kind=bool,
        levels=(0, 1, 2)),

@@ -118,7 +118,12 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
     (``torsional.wrap_statics``; with ``level``, that level's own fit too)."""
     if drive.links is None:
         return []
-    return _length_problems(drive, params) + _wrap_statics_problems(drive, params, level)
+    length = _length_problems(drive, params)
+    wrap = _wrap_statics_problems(drive, params, level)
+    if length and wrap and wrap[0].code == "wrap_statics_unavailable":
+        # the length is the cause: one warning, which says what it also costs (the wrap fit)
+        return [Problem(length[0].code, f"{length[0].message}. Therefore {wrap[0].message}")]
+    return length + wrap
 
 
 def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],

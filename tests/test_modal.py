@@ -24,10 +24,11 @@ def _t2():
 
 def _undamped_c1(**kw):
     """C1 with Table 2 values as seed 004 models it: no chain inertia in eq 50, no gravity, the
-    driver prescribed (rigid), no damping (so the eigenvalues are purely imaginary)."""
+    driver prescribed (rigid), no damping (so the eigenvalues are purely imaginary), linear
+    spans between rigid seats (not level 3's wrap: torsional.wrap_statics off)."""
     return chainmodel.Scene.from_preset(
         "C1", fidelity=2, torsional_chain_inertia=False, gravity=0.0, driven_damping=0.0,
-        chain_link_damping=0.0, modal_damping_ratio=0.0, **kw)
+        chain_link_damping=0.0, modal_damping_ratio=0.0, torsional_wrap_statics=False, **kw)
 
 
 def _jacobian(m, x, u):

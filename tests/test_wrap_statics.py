@@ -53,25 +53,26 @@ def _level3_at_rest(dc):
                           for r in rows]))
 
 
-@pytest.mark.parametrize("options", [{}, ON], ids=["default", "wrap_statics"])
+@pytest.mark.parametrize("options", [{"torsional_wrap_statics": False}, ON],
+                         ids=["seat_ladder", "wrap_statics"])
 @pytest.mark.parametrize("dc", [0.0, -0.5e-3, -2e-3, -5e-3])
 def test_fan_without_pretension_static_tension_agrees_at_every_level(dc, options):
-    """By default too: a chain with no pretension that the seat ladder leaves slack hangs on
-    its sag, and levels 0-2 carry that tension (wrap_statics.weighted_static_tension: the
+    """On the seat ladder too (torsional.wrap_statics off): a chain with no pretension that
+    the seat ladder leaves slack hangs on its sag, and levels 0-2 carry that tension (wrap_statics.weighted_static_tension: the
     elastic catenary, its sag term from level 3's statics where the weight carries the
     tension); level 2 refuses a chain longer than its wrap (dc < 0) unless the option holds
     its ends, and says so."""
     t3 = _level3_at_rest(dc)
     assert t3 > 1.0                     # the sag tension, not a slack 0
     for level in (0, 1, 2):
-        if level == 2 and dc < 0 and not options:
+        if level == 2 and dc < 0 and options != ON:
             # longer than its wrap: level 2's strings refuse it unless the option holds it
             with pytest.raises(ValueError, match="torsional.wrap_statics"):
-                _fan_scene(dc, level).model()
+                _fan_scene(dc, level, **options).model()
             continue
         t = _fan_scene(dc, level, **options).model().static_tension()
         assert t == pytest.approx(t3, rel=0.05), level
-    if not options:
+    if options != ON:
         return
     # level 1 with the option turned at 1 rpm through one tooth period from rest: its mean
     # span tension over the tooth holds level 3's (its span law and polygon, not a number; at
@@ -212,7 +213,7 @@ def test_sagging_drive_mode_is_level3s_ring_down(tmp_path):
     mode linear_driven_modes picks within 3 % - the mode choice checked by level 3's own
     dynamics, not by the linearisation - and level 1 on the wrap within 3 % of it. The statics'
     secant is its sag's, about a fifth of the stiffness the mode needs: level 1 on it, or on
-    the seat ladder with the quasi-static sag (the default), rings 30-40 % low."""
+    the seat ladder with the quasi-static sag (torsional.wrap_statics off), rings 30-40 % low."""
     path = tmp_path / "sagging.toml"
     path.write_text(_SAGGING_08B)
     sc = load_scene(str(path), fidelity=1, **ON)
@@ -461,6 +462,8 @@ def test_a_chain_hanging_at_rest_gets_no_wrap_fitted_at_rest(level):
                             ramp_time=0.05, **_loose_xu2010(0.0), **ON)
     found = [w for w in r.warnings if "torsional.wrap_statics = true was not honoured" in w]
     assert len(found) == 1 and "hangs on its sag" in found[0], r.warnings
+    # the cause first: the chain is too long for its centre distance (chainmodel.validity)
+    assert found[0].startswith("the chain is too long") and len(r.warnings) == 1
     sc = r.scene
     assert r.static_tension == pytest.approx(
         W.weighted_static_tension(sc.drive, sc.parameters), rel=1e-9)

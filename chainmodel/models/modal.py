@@ -43,6 +43,7 @@ from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
 from .span_sag import span_terms
 from .torsional import TorsionalModel
+from .wrap_statics import unavailable
 
 __all__ = ["ModalModel", "galerkin_coefficients"]
 
@@ -81,13 +82,18 @@ class ModalModel(TorsionalModel):
         from .kinematic import loose_chain_error
         loose = loose_chain_error(drive, self.params)
         # a chain longer than its wrap: refused unless level 3's statics hold its ends (its
-        # slack span hangs in a sag that turns deep under load, past the strings' validity)
-        if not t0 > 0.0 or (loose is not None and not self.params["torsional.wrap_statics"]):
+        # slack span hangs in a sag that turns deep under load, past the strings' validity);
+        # where the wrap fit refused the drive, the seat ladder holds them and cannot
+        held = self.params["torsional.wrap_statics"] and unavailable(drive, self.params) is None
+        if not t0 > 0.0 or (loose is not None and not held):
             if loose is not None:
+                why = ("torsional.wrap_statics = true holds one on level 3's statics"
+                       if not self.params["torsional.wrap_statics"] else
+                       "torsional.wrap_statics could not hold it on level 3's statics: "
+                       + unavailable(drive, self.params).rstrip("."))
                 raise ValueError(f"the modal model (level 2) needs both spans in tension at rest "
                                  f"(its spans are taut strings, not a chain hanging in a sag; "
-                                 f"torsional.wrap_statics = true holds one on level 3's "
-                                 f"statics), but {loose}")
+                                 f"{why}), but {loose}")
             raise ValueError(
                 f"the modal model (level 2) needs both spans in tension at rest, but the static "
                 f"span tension is {t0:g} N (a string without tension has no transverse "
