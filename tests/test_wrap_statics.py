@@ -8,9 +8,7 @@ docs/reduced_models.md "One wrap and one static tension from level 3's statics")
 * item 3: the wrap's stiffness K_m puts levels 1-2's two-inertia system on level 3's linear
   driven-sprocket mode (checked against tests/linearised.py's own linearisation); C1's and
   xu2010's ring-downs at levels 1 and 2 after a sudden start to 1 and 5 rpm within 3 % of
-  level 3's from the same start and of the two-inertia estimate on K_m; level 1 on C1 at
-  5 rpm is a strict xfail (level 3 softens with the amplitude, docs/reduced_models.md); each
-  level's own linear mode at rest, from the test's own linearisation, on level 3's;
+  level 3's from the same start and of the two-inertia estimate on K_m; each level's own linear mode at rest, from the test's own linearisation, on level 3's;
   xu2010's loaded split, turned quasi-statically, against level 3's statics; level 2's floor
   fitted with its strings' sag (its loaded split is level 1's); the option's fallbacks warn.
 """

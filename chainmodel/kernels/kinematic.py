@@ -33,7 +33,8 @@ from ..outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CON
 from .spans import span_geometry
 from .span_roles import lower_tight
 
-__all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "K_SIZE", "C_SIZE"]
+__all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "split", "split_many",
+           "K_SIZE", "C_SIZE"]
 
 # --- four-bar constants (fourbar_constants) -----------------------------------------------------
 (K_TH4S, K_TH2S, K_TH4R, K_TWO_AC, K_AO, K_R1, K_R2, K_R4, K_TH1, K_L, K_PITCH, K_REV_D,
@@ -43,8 +44,8 @@ K_SIZE = 13
 # --- level-0 constants (KinematicModel._kernel_constants) --------------------------------------
 #: driver inertia, driven inertia, driven damping, sum of the span tensions 2 T0, rho * g_n for
 #: the sag, tooth ratio n_driver / n_driven, centrifugal tension per (rad/s)^2 of the driver
-C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL = range(7)
-C_SIZE = 7
+C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL, C_FLOOR = range(8)
+C_SIZE = 8
 
 _EVENT_TOL = 1e-12   # chainmodel.kinematics.fourbar._EVENT_TOL
 
@@ -132,6 +133,65 @@ def driven_rotation(phi, w, a, reverse, K):
 
 
 @jit
+def split(total, floor, arm_pull, arm_back, load):
+    """Quasi-static span tensions (T_pull, T_back) of a rigid chain: T_pull a_pull - T_back
+    a_back = load, the spans' linear (raw) tensions summing to ``total``.
+
+    Without a floor (``floor`` = 0: the seat ladder's linear law) the tensions are the raw
+    ones, T_pull + T_back = total, and a span that would push carries 0 (seed 004 eqs 15-16).
+    With the wrap fit's floor b (torsional.wrap_statics: levels 1-2's span law,
+    kernels/spans.py ``_tension``) each tension is softplus(raw, b) = (raw + sqrt(raw^2 +
+    4 b^2)) / 2, whose inverse is raw = T - b^2 / T. With the torque balance giving one
+    tension from the other, the raw sum g = T_pull - b^2 / T_pull + T_back - b^2 / T_back -
+    total is increasing and concave in either, and -> -inf where it -> 0, so Newton's method
+    from a point where g <= 0 rises monotonically to the root."""
+    if floor <= 0.0:
+        t_pull = (load + total * arm_back) / (arm_pull + arm_back)
+        t_back = total - t_pull
+        if t_back < 0:
+            t_pull = load / arm_pull
+            t_back = 0.0
+        if t_pull < 0:
+            t_back = -load / arm_back
+            t_pull = 0.0
+        return t_pull, t_back
+    # Newton on the span that carries less (the back span when the load is positive): its
+    # tension s has lower bound 0 and the other follows without cancellation
+    if load >= 0.0:
+        s, q = _floored_root(total, floor, arm_back / arm_pull, load / arm_pull)
+        return q, s
+    return _floored_root(total, floor, arm_pull / arm_back, -load / arm_back)
+
+
+@jit
+def _floored_root(total, floor, ratio, offset):
+    """(s, q) with q = offset + ratio s, offset >= 0, s - b^2 / s + q - b^2 / q = total:
+    Newton from the left of the root (:func:`split`)."""
+    b2 = floor * floor
+    s = max((total - offset) / (1.0 + ratio), floor)     # the linear split's, or b
+    for _ in range(1100):                          # a start with g <= 0: halve toward 0
+        q = offset + ratio * s
+        if s - b2 / s + q - b2 / q - total <= 0.0:
+            break
+        s *= 0.5
+    for _ in range(200):
+        q = offset + ratio * s
+        g = s - b2 / s + q - b2 / q - total
+        step = -g / (1.0 + b2 / (s * s) + ratio * (1.0 + b2 / (q * q)))
+        s += step
+        if step <= 1e-14 * (s + floor):
+            break
+    return s, offset + ratio * s
+
+
+@jit
+def split_many(total, floor, arm_pull, arm_back, load, t_pull, t_back):
+    """:func:`split` over arrays, into ``t_pull`` and ``t_back``."""
+    for i in range(load.shape[0]):
+        t_pull[i], t_back[i] = split(total, floor, arm_pull[i], arm_back[i], load[i])
+
+
+@jit
 def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     """Every output of level 0 (ALL_OUTPUTS order) for the input-shaft motion (angle, speed,
     acc) and the load torque into ``out``: the tight span is the one the driver pulls for the
@@ -146,16 +206,7 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     low_start = g[10]
     low_end = g[11]
     load = C[C_I2] * a2 + C[C_D2] * w2 + torque
-    # split_tensions(2 T0, upper arm_start, lower arm_end, load), in its order of operations
-    total = C[C_SUM]
-    t_up = (load + total * low_end) / (up_start + low_end)
-    t_low = total - t_up
-    if t_low < 0:
-        t_up = load / up_start
-        t_low = 0.0
-    if t_up < 0:
-        t_low = -load / low_end
-        t_up = 0.0
+    t_up, t_low = split(C[C_SUM], C[C_FLOOR], up_start, low_end, load)
     tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
     if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc):
         tight = t_up

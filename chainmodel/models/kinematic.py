@@ -18,7 +18,11 @@ eqs (15)-(16) we close the system with the sum T_u + T_l = 2 T0, T0 the static s
 (the chain's pre-strain plus the stretch the centre distance forces on the span links, the
 seated links being held by rigid seats; with seat compliance see :func:`static_span_tension`).
 A span cannot push: if one tension would be negative it is zero and the other carries the whole
-torque. The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
+torque. With ``torsional.wrap_statics`` (the default) T0 is level 3's static tension and each
+span follows levels 1-2's law with the fit's floor b under the slack span: the spans' raw
+tensions T - b^2 / T keep their sum, so under load the slack span stays on the floor's knee
+as at levels 1-3 instead of dropping to what a linear split leaves it
+(:func:`chainmodel.kernels.kinematic.split`). The reported tensions add the centrifugal tension rho A v^2 to both spans (not to the
 torques), and the tight span is the one the power flow names (kernels/span_roles.py).
 """
 
@@ -46,16 +50,19 @@ __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stif
            "seat_series_compliance", "seated_tension", "pretension_error", "loose_chain_error"]
 
 
-def split_tensions(sum_tension, arm_pull, arm_back, torque):
-    """Tensions (T_pull, T_back) with T_pull a_pull - T_back a_back = torque and
-    T_pull + T_back = sum_tension, neither negative (vectorised)."""
-    t_pull = (torque + sum_tension * arm_back) / (arm_pull + arm_back)
-    t_back = sum_tension - t_pull
-    t_pull = np.where(t_back < 0, torque / arm_pull, t_pull)
-    t_back = np.where(t_back < 0, 0.0, t_back)
-    t_back = np.where(t_pull < 0, -torque / arm_back, t_back)
-    t_pull = np.where(t_pull < 0, 0.0, t_pull)
-    return t_pull, t_back
+def split_tensions(sum_tension, arm_pull, arm_back, torque, floor=0.0):
+    """Tensions (T_pull, T_back) with T_pull a_pull - T_back a_back = torque and the raw
+    tensions summing to ``sum_tension``; without a ``floor`` the tensions are the raw ones,
+    neither negative; with one each is the floored law of levels 1-2 (vectorised
+    :func:`chainmodel.kernels.kinematic.split`)."""
+    from ..kernels.kinematic import split_many
+    arm_pull, arm_back, torque = np.broadcast_arrays(
+        *(np.ascontiguousarray(v, dtype=float) for v in (arm_pull, arm_back, torque)))
+    shape = torque.shape
+    t_pull, t_back = np.empty(torque.size), np.empty(torque.size)
+    split_many(float(sum_tension), float(floor), arm_pull.ravel(), arm_back.ravel(),
+               torque.ravel(), t_pull, t_back)
+    return t_pull.reshape(shape), t_back.reshape(shape)
 
 
 class KinematicModel(Model):
@@ -130,6 +137,23 @@ class KinematicModel(Model):
     def static_tension(self) -> float:
         return self._static_tension
 
+    @cached_property
+    def _floor(self) -> float:
+        """The wrap fit's floor b [N] under the slack span (torsional.wrap_statics, where
+        honoured; 0: the linear law)."""
+        from .wrap_statics import span_ends, unavailable
+        if (self.drive.links is None or not self.params.get("torsional.wrap_statics")
+                or unavailable(self.drive, self.params) is not None):
+            return 0.0
+        return float(span_ends(self.drive, self.params)[2])
+
+    @cached_property
+    def _raw_sum(self) -> float:
+        """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T0,
+        or 2 (T0 - b^2 / T0) under the floor b (the raw tension whose floored value is T0)."""
+        t0, b = self._static_tension, self._floor
+        return 2.0 * (t0 - b * b / t0) if b > 0.0 else 2.0 * t0
+
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
         for name in ("tight_span.tension", "slack_span.tension", "input_shaft.torque"):
@@ -159,8 +183,8 @@ class KinematicModel(Model):
             g = chain_geometry(drive, angle[sel], rot.driven_angle)
             load = (p["driven.inertia"] * rot.driven_acceleration
                     + p["driven.damping"] * rot.driven_speed + torque[sel])
-            t_up, t_low = split_tensions(2 * self._static_tension, g.upper.arm_start,
-                                         g.lower.arm_end, load)
+            t_up, t_low = split_tensions(self._raw_sum, g.upper.arm_start,
+                                         g.lower.arm_end, load, self._floor)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
             # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
@@ -194,7 +218,7 @@ class KinematicModel(Model):
         C = np.empty(KK.C_SIZE)
         C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],
                                               p["driven.damping"])
-        C[KK.C_SUM] = 2 * self._static_tension
+        C[KK.C_SUM], C[KK.C_FLOOR] = self._raw_sum, self._floor
         C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
                                                           * math.cos(p["drive.inclination"]))
         C[KK.C_RATIO] = d.tooth_ratio

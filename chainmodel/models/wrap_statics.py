@@ -466,7 +466,7 @@ def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None)
     own (sentences, empty if none): level 3 had no linear mode (:func:`wrap_fit` took the static secant K_3),
     or the model of ``level`` could not be fitted to it (:mod:`chainmodel.models.
     torsional_mode`: the ends stay on K_m). chainmodel.validity turns each into a warning."""
-    if level in (0, 3):     # level 0 takes only T_0 from the fit, level 3 its own statics
+    if level in (0, 3):     # level 0 takes T_0 and the floor from the fit, no mode; level 3 its own
         return []
     key = (None,) + parameters_key(drive, params)
     found = [_FELL_BACK[key]] if key in _FELL_BACK else []
