@@ -42,8 +42,9 @@ __all__ = ["fourbar_constants", "driven_rotation", "level0_outputs", "split", "s
 K_SIZE = 13
 
 # --- level-0 constants (KinematicModel._kernel_constants) --------------------------------------
-#: driver inertia, driven inertia, driven damping, sum of the span tensions 2 T0, rho * g_n for
-#: the sag, tooth ratio n_driver / n_driven, centrifugal tension per (rad/s)^2 of the driver
+#: driver inertia, driven inertia, driven damping, sum of the spans' raw tensions (2 T0; 2 (T0 -
+#: b^2 / T0) under a floor), rho * g_n for the sag, tooth ratio n_driver / n_driven, centrifugal
+#: tension per (rad/s)^2 of the driver, the wrap fit's floor b (0: none; :func:`split`)
 C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL, C_FLOOR = range(8)
 C_SIZE = 8
 
