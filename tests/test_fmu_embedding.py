@@ -174,9 +174,11 @@ def test_memory_is_bounded_over_1000_instantiations(chaindrive_fmu, tmp_path):
     # adapter class would be hundreds of blocks per call.
     per_call = (end["blocks"] - half["blocks"]) / (n - n // 2)
     assert per_call <= 2 + 2 * half["mro"] + 4, per_call
-    # and the process's memory over the second 500 instantiations: under 1 MiB (it grew by
-    # 25-30 MB per 500 before)
-    assert end["rss"] - half["rss"] < 2 ** 20
+    # and the process's memory over the second 500 instantiations: under 4 MiB (it grew by
+    # 25-30 MB per 500 before). The blocks allowed above (about 11.5 per call, pythonfmu's
+    # retained reprs) and the allocator's arenas come to 0.6-1.1 MiB, measured on this build
+    # and on 3fac491's alike; the earlier 1 MiB bound failed one CI run in three at 1.05 MiB
+    assert end["rss"] - half["rss"] < 4 * 2 ** 20
 
 
 # --- a host's ordinary life, then exit ----------------------------------------------------------
