@@ -140,12 +140,9 @@ class KinematicModel(Model):
     @cached_property
     def _floor(self) -> float:
         """The wrap fit's floor b [N] under the slack span (torsional.wrap_statics, where
-        honoured; 0: the linear law)."""
-        from .wrap_statics import span_ends, unavailable
-        if (self.drive.links is None or not self.params.get("torsional.wrap_statics")
-                or unavailable(self.drive, self.params) is not None):
-            return 0.0
-        return float(span_ends(self.drive, self.params)[2])
+        honoured; span_ends gives 0, the linear law, everywhere else)."""
+        from .wrap_statics import span_ends
+        return 0.0 if self.drive.links is None else float(span_ends(self.drive, self.params)[2])
 
     @cached_property
     def _raw_sum(self) -> float:

@@ -43,7 +43,7 @@ from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
 from .span_sag import span_terms
 from .torsional import TorsionalModel
-from .wrap_statics import unavailable
+from .wrap_statics import honoured, unavailable
 
 __all__ = ["ModalModel", "galerkin_coefficients"]
 
@@ -84,8 +84,7 @@ class ModalModel(TorsionalModel):
         # a chain longer than its wrap: refused unless level 3's statics hold its ends (its
         # slack span hangs in a sag that turns deep under load, past the strings' validity);
         # where the wrap fit refused the drive, the seat ladder holds them and cannot
-        held = self.params["torsional.wrap_statics"] and unavailable(drive, self.params) is None
-        if not t0 > 0.0 or (loose is not None and not held):
+        if not t0 > 0.0 or (loose is not None and not honoured(drive, self.params)):
             if loose is not None:
                 why = ("torsional.wrap_statics = true holds one on level 3's statics"
                        if not self.params["torsional.wrap_statics"] else

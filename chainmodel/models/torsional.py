@@ -53,7 +53,7 @@ from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_series_compliance, seat_stiffness
-from .wrap_statics import span_ends, span_sag_terms, static_span_tension, unavailable
+from .wrap_statics import honoured, span_ends, span_sag_terms, static_span_tension
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -129,8 +129,7 @@ class TorsionalModel(Model):
     def _fit_wrap_to_own_mode(self) -> None:
         """With ``torsional.wrap_statics``: refit the span ends so that this level's own
         driven-sprocket mode at rest is level 3's (:mod:`.torsional_mode`)."""
-        if (self.drive.links is None or not self.params["torsional.wrap_statics"]
-                or unavailable(self.drive, self.params) is not None):
+        if not honoured(self.drive, self.params):
             return
         from .torsional_mode import fitted_ends
         ends = fitted_ends(self)

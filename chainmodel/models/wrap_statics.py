@@ -63,8 +63,9 @@ from . import span_sag as SG
 from .chain_inertia import sprocket_mass_matrix, two_inertia_stiffness
 from . import static_tension as ST
 
-__all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension", "weighted_static_tension",
-           "weighted", "span_sag_terms", "modal_stiffness", "softplus", "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "fallbacks",
+__all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension",
+           "weighted_static_tension", "weighted", "span_sag_terms", "modal_stiffness", "softplus",
+           "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "honoured", "fallbacks",
            "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
            "span_elastic_compliance"]
 
@@ -497,6 +498,14 @@ def unavailable(drive: Drive, params: Mapping[str, Any]) -> str | None:
     return _FAILED.get(parameters_key(drive, params))
 
 
+def honoured(drive: Drive, params: Mapping[str, Any]) -> bool:
+    """Whether the span ends come from the wrap fit: ``torsional.wrap_statics`` on, a drive
+    with a link count, and the fit (already attempted, as building the model's span ends does)
+    not refused (:func:`unavailable`)."""
+    return (bool(params.get("torsional.wrap_statics")) and drive is not None
+            and drive.links is not None and unavailable(drive, params) is None)
+
+
 def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
     """Level 3's static span tension [N] of this drive at rest, no load (its static
     equilibrium, gravity included: :func:`~chainmodel.models.multibody_statics.static_state`),
@@ -535,7 +544,7 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool 
             return t3
     if params.get("torsional.wrap_statics"):
         c, f, a = span_ends(drive, params)
-        if unavailable(drive, params) is None:
+        if honoured(drive, params):
             k = params["chain.link_stiffness"]
             excess, links = ST.rest_geometry(drive)
             raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
