@@ -173,3 +173,34 @@ def test_level3_static_tension_is_the_solution():
     sol = model.static_solution()
     assert model.static_tension() == 0.5 * (sol.tension_upper + sol.tension_lower)
     assert sol.residual <= 1e-3 * model.params["chain.link_mass"] * model.params["gravity"]
+
+
+@pytest.mark.parametrize("theta", np.linspace(0.0, np.pi, 7))
+def test_a_degenerate_pairs_driven_mode_does_not_depend_on_its_basis(theta):
+    """Two modes of one frequency have any rotation of their shapes within their plane for
+    eigenvectors; the driven-sprocket mode taken must not depend on it. Four coordinates of unit
+    mass, the driven sprocket first: a pair at 10 rad/s (shapes u = e1 and v = (e0 + e2) / sqrt 2),
+    a mode h at 20 rad/s with 0.45 of the driven sprocket's energy, a fourth at 30 rad/s; the
+    static wrap's shape ref = u + 0.3 h. Summed over the pair, share (0.5) and MAC (0.92) are
+    the same in every basis, so the pair is taken at 10 rad/s whatever theta. Taken one by one
+    the answer moves with theta (checked here, so the case exercises the gate): at theta = 0 u
+    has no share and falls below the gate, and h is taken."""
+    from chainmodel.models.multibody_statics import SHARE_GATE, _driven_mode
+    c = math.sqrt(0.45)
+    u = np.array([0.0, 1.0, 0.0, 0.0])
+    v = np.array([1.0, 0.0, 1.0, 0.0]) / math.sqrt(2.0)
+    h = np.array([c, 0.0, -c, math.sqrt(1.0 - 2.0 * c * c)])
+    w = np.linalg.svd(np.vstack([u, v, h]))[2][-1]
+    phi = np.column_stack([math.cos(theta) * u + math.sin(theta) * v,
+                           -math.sin(theta) * u + math.cos(theta) * v, h, w])
+    assert np.allclose(phi.T @ phi, np.eye(4))
+    lam = np.array([100.0, 100.0, 400.0, 900.0])
+    mass = np.ones(4)
+    ref = u + 0.3 * h
+    assert _driven_mode(lam, phi, mass, 0, ref) == pytest.approx(10.0, rel=1e-12)
+    # one by one: the gate and the MAC on each shape alone
+    share, mac = phi[0] ** 2, (phi.T @ ref) ** 2
+    gated = np.flatnonzero(share >= SHARE_GATE * share.max())
+    single = math.sqrt(lam[gated[np.argmax(mac[gated])]])
+    if theta == 0.0:
+        assert single == pytest.approx(20.0)

@@ -4,6 +4,11 @@ count / k plus the loaded seats' ladder), their ratio against wrap_statics.END_R
 static tension and mode at rest, and the spans' first string mode (1 / 2L) sqrt(T_0 / rho).
 
     python docs/scripts/wrap_refusals.py        # about 30 s
+    python docs/scripts/wrap_refusals.py tight  # xu2010 at its tight distance, 380-470 N
+
+``tight`` scans the pretension of xu2010 at its tight centre distance (0 mm), where its two
+alike spans have near-degenerate string modes ("Two alike spans"): the fitted mode and K_m, or
+why the fit is refused, per pretension.
 
 The ratio is printed for refused drives too: the gate is lifted for this table (END_RATIO set
 to infinity in this process only); a negative c prints as refused.
@@ -46,6 +51,24 @@ def cases():
     yield "xu2010, links x0.01", "xu2010", dict(chain_link_stiffness=5.1e5)
 
 
+def tight_scan():
+    sc = load_scene("xu2010", fidelity=1, drive_centre_distance=0.0, static_tension=None)
+    print("| pretension [N] | T_0 [N] | mode [Hz] | K_m [N m/rad] |")
+    print("|---|---|---|---|")
+    for pre in [380.0 + 5.0 * i for i in range(19)] + [450.7, 451.0, 451.3, 451.7]:
+        p = dict(sc.parameters, **{"chain.pretension": pre})
+        try:
+            f = W.wrap_fit(sc.drive, p)
+        except ValueError as exc:
+            print(f"| {pre:.1f} | - | - | refused: {str(exc)[:70]}... |")
+            continue
+        print(f"| {pre:.1f} | {f.static_tension:.1f} | {f.mode:.1f} | {f.modal_stiffness:.0f} |")
+
+
+if sys.argv[1:] == ["tight"]:
+    W.END_RATIO = limit
+    tight_scan()
+    sys.exit(0)
 print(f"END_RATIO = {limit:g}\n")
 print("| drive | c [m/N] | elastic [m/N] | ratio | T_0 [N] | mode [Hz] | string [Hz] | fit |")
 print("|---|---|---|---|---|---|---|---|")
