@@ -26,7 +26,7 @@ real time, level 2 >= 50x: issue 20 item 7; issue 8 asked 20x), with the steppin
 and the evaluations per point.
 
     python benchmarks/reduced.py [--duration 0.5] [--repeat 3] [--per-point] [--all]
-    python benchmarks/reduced.py --targets [--repeat 5]
+    python benchmarks/reduced.py --targets [--repeat 5] [--set NAME=VALUE ...]
 """
 
 from __future__ import annotations
@@ -75,9 +75,11 @@ def errors(r, ref, duration):
     return d_phi, d_t
 
 
-def targets(scenes, repeat):
+def targets(scenes, repeat, settings=None):
     """Whole 1 s simulate() calls at the default output interval (issue 8's targets), wall and
-    CPU time (the machine is shared: CPU time is what a dedicated core gives)."""
+    CPU time (the machine is shared: CPU time is what a dedicated core gives; above the wall
+    time where another thread spins, e.g. a BLAS pool after a set-up call). ``settings``:
+    overrides for every scene (``--set``), e.g. the seat ladder beside the default."""
     print(f"numba: {_numba.enabled()}; best of {repeat}; load average "
           f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
     print("| scene | level | x real time, wall | x real time, CPU | target | stepping [ms] | "
@@ -86,6 +88,7 @@ def targets(scenes, repeat):
     for name in scenes:
         for level, goal in ((1, 100), (2, 50)):
             sc = chainmodel.Scene.from_preset(name, fidelity=level, duration=1.0)
+            sc = sc.with_overrides(**(settings or {}))
             simulation.run_scene(sc.with_overrides(duration=0.01))          # warm-up
             wall = cpu = stepping = np.inf
             for _ in range(repeat):
@@ -115,9 +118,13 @@ def main(argv=None):
     ap.add_argument("--scenes", nargs="*", default=["xu2010", "C1"])
     ap.add_argument("--targets", action="store_true",
                     help="only the whole 1 s call at the default output interval")
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                    help="with --targets: a scene setting for every run, as chainmodel run's "
+                         "--set (e.g. torsional.wrap_statics=false)")
     args = ap.parse_args(argv)
     if args.targets:
-        return targets(args.scenes, args.repeat)
+        from chainmodel.cli_support import parse_settings
+        return targets(args.scenes, args.repeat, parse_settings(args.set))
     dur = args.duration
     print(f"numba: {_numba.enabled()}; duration {dur} s; best of {args.repeat}; batched path: "
           f"{BATCHED}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
