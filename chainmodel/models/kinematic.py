@@ -148,8 +148,8 @@ class KinematicModel(Model):
     def _raw_sum(self) -> float:
         """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T0,
         or 2 (T0 - b^2 / T0) under the floor b (the raw tension whose floored value is T0)."""
-        t0, b = self._static_tension, self._floor
-        return 2.0 * (t0 - b * b / t0) if b > 0.0 else 2.0 * t0
+        from .wrap_statics import raw_tension
+        return 2.0 * raw_tension(self._static_tension, self._floor)
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()

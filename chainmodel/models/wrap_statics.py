@@ -67,7 +67,7 @@ __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_t
            "weighted_static_tension", "weighted", "span_sag_terms", "modal_stiffness", "softplus",
            "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "honoured", "fallbacks",
            "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
-           "span_elastic_compliance"]
+           "span_elastic_compliance", "raw_tension"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -284,13 +284,13 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
     c = _compliance(target, n_up, n_low, k, 1.0, 1.0)
     spans = (n_up, n_low, k, sags)
     for _ in range(4):
-        t0_lin = _linear(t0, b)
+        t0_lin = raw_tension(t0, b)
         s = _slope(t0_lin, b)
         c = _compliance(target, n_up, n_low, k, s, s)
         if slack3 is None or slack3 <= _split_slack(t0, 0.0, c, spans, dt):
             break
         b = _softness(t0, slack3, c, spans, dt)
-    t0_lin = _linear(t0, b)
+    t0_lin = raw_tension(t0, b)
     # the floor is the cause where the spans without it would take non-negative ends
     by_floor = c < 0.0 < b and _compliance(target, n_up, n_low, k, 1.0, 1.0) >= 0.0
     _plausible(c, span_elastic_compliance(drive, params), stiffness,
@@ -561,8 +561,9 @@ def softplus(raw: float, b: float) -> float:
     return 0.5 * (raw + r) if raw > 0 else 2.0 * b * b / (r - raw)
 
 
-def _linear(t0, b):
-    """The raw (linear) tension whose floored value is t0: t0 - b^2 / t0."""
+def raw_tension(t0, b):
+    """The raw (linear-law) tension whose floored value (:func:`softplus`) is t0: t0 - b^2 /
+    t0; t0 itself without a floor (b = 0)."""
     if b <= 0.0:
         return t0
     return t0 - b * b / t0
@@ -632,7 +633,7 @@ def _split_slack(t0, b, c, spans, dt):
     from scipy.optimize import brentq
     n_up, n_low, k, (s_up, s_low) = spans
     ku, kl = 1.0 / (n_up / k + c), 1.0 / (n_low / k + c)
-    t0_lin = _linear(t0, b)
+    t0_lin = raw_tension(t0, b)
     # at u = 0 each span's raw tension plus its sag's k S / t0^2 is t0_lin: both hold t0
     r_u, r_l = t0_lin - ku * s_up / (t0 * t0), t0_lin - kl * s_low / (t0 * t0)
 
