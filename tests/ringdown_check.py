@@ -31,14 +31,18 @@ def ring(name, level, band, rpm=5.0, **kw) -> float:
     return peak_frequency(r, band)
 
 
-def peak_frequency(result, band) -> float:
-    """The driven speed's spectral peak [Hz] within ``band`` after 0.02 s."""
+def spectrum(result) -> tuple[np.ndarray, np.ndarray]:
+    """(f [Hz], |X|) of the driven speed after 0.02 s (module docstring)."""
     m = result.time >= 0.02
     t, w = result.time[m], result["driven.speed"][m]
     x = (w - np.polyval(np.polyfit(t, w, 1), t)) * np.hanning(m.sum())
     n = 16 * x.size
-    spec = np.abs(np.fft.rfft(x, n))
-    f = np.fft.rfftfreq(n, t[1] - t[0])
+    return np.fft.rfftfreq(n, t[1] - t[0]), np.abs(np.fft.rfft(x, n))
+
+
+def peak_frequency(result, band) -> float:
+    """The driven speed's spectral peak [Hz] within ``band`` after 0.02 s."""
+    f, spec = spectrum(result)
     spec[(f < band[0]) | (f > band[1])] = 0.0
     return float(f[np.argmax(spec)])
 

@@ -180,13 +180,16 @@ def test_a_degenerate_pairs_driven_mode_does_not_depend_on_its_basis(theta):
     """Two modes of one frequency have any rotation of their shapes within their plane for
     eigenvectors; the driven-sprocket mode taken must not depend on it. Four coordinates of unit
     mass, the driven sprocket first: a pair at 10 rad/s (shapes u = e1 and v = (e0 + e2) / sqrt 2),
-    a mode h at 20 rad/s with 0.45 of the driven sprocket's energy, a fourth at 30 rad/s; the
-    static wrap's shape ref = u + 0.3 h. Summed over the pair, share (0.5) and MAC (0.92) are
-    the same in every basis, so the pair is taken at 10 rad/s whatever theta. Taken one by one
-    the answer moves with theta (checked here, so the case exercises the gate): at theta = 0 u
-    has no share and falls below the gate, and h is taken."""
-    from chainmodel.models.multibody_statics import SHARE_GATE, _driven_mode
-    c = math.sqrt(0.45)
+    a mode h = (0.6, 0, -0.6, sqrt 0.28) at 20 rad/s, a fourth at 30 rad/s; the static wrap's
+    shape ref = cos 30 deg u + sin 30 deg v + 0.6 h (|ref|^2 = 1.36). Summed over the pair, in
+    every basis: its response (the pair's part of ref read at the driven sprocket, sin 30 deg /
+    sqrt 2 = 0.354) is 0.96 of h's (0.6 x 0.6), inside the gate, and its MAC (1 / 1.36 = 0.735)
+    is h's (0.36 / 1.36 = 0.265) times 2.8, so the pair is taken at 10 rad/s whatever theta.
+    Taken one by one the answer moves with theta (checked here, so the case exercises the
+    gate): at theta = 0 u has no response and falls below the gate, v's MAC is 0.184, and h is
+    taken."""
+    from chainmodel.models.multibody_statics import MODE_GATE, _driven_mode
+    c = 0.6
     u = np.array([0.0, 1.0, 0.0, 0.0])
     v = np.array([1.0, 0.0, 1.0, 0.0]) / math.sqrt(2.0)
     h = np.array([c, 0.0, -c, math.sqrt(1.0 - 2.0 * c * c)])
@@ -196,11 +199,29 @@ def test_a_degenerate_pairs_driven_mode_does_not_depend_on_its_basis(theta):
     assert np.allclose(phi.T @ phi, np.eye(4))
     lam = np.array([100.0, 100.0, 400.0, 900.0])
     mass = np.ones(4)
-    ref = u + 0.3 * h
+    ref = math.cos(math.pi / 6) * u + math.sin(math.pi / 6) * v + 0.6 * h
     assert _driven_mode(lam, phi, mass, 0, ref) == pytest.approx(10.0, rel=1e-12)
     # one by one: the gate and the MAC on each shape alone
-    share, mac = phi[0] ** 2, (phi.T @ ref) ** 2
-    gated = np.flatnonzero(share >= SHARE_GATE * share.max())
+    response, mac = (phi[0] * (phi.T @ ref)) ** 2, (phi.T @ ref) ** 2 / (ref @ ref)
+    gated = np.flatnonzero(response >= MODE_GATE * response.max())
     single = math.sqrt(lam[gated[np.argmax(mac[gated])]])
     if theta == 0.0:
         assert single == pytest.approx(20.0)
+
+
+@pytest.mark.parametrize("name", ["C1", "xu2010"])
+def test_the_modes_responses_are_the_initial_velocitys_modal_expansion(name):
+    """mode_measures' response of each mode is the driven sprocket's speed in it when the drive
+    starts from rest position with velocity ref: at t = 0 the modes' speeds add up to the
+    initial velocity itself, so over every mode the responses sum to sqrt(J_2 / ref^T M ref)
+    ref_2 (the modal expansion; the modes are complete because ref, the static condensation's
+    shape, lies in the span of the partly condensed model's shapes), and response^2 = share x
+    MAC mode by mode (both from their own definitions)."""
+    from chainmodel.models.multibody_statics import linearised_modes, mode_measures
+    m3 = load_scene(name, fidelity=3).model()
+    lam, phi, mass, driven, ref, _ = linearised_modes(m3, m3.static_solution())
+    assert np.all(lam > 0.0)
+    share, mac, response = mode_measures(lam, phi, mass, driven, ref)
+    whole = math.sqrt(mass[driven] / (ref @ (mass * ref))) * ref[driven]
+    assert response.sum() == pytest.approx(whole, rel=1e-6)
+    assert np.allclose(response ** 2, share * mac, rtol=1e-9, atol=1e-15)

@@ -48,13 +48,15 @@ from ..kernels.multibody_outputs import span_ends
 from .base import Inputs
 
 __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes",
-           "linearised_modes", "mode_measures", "SHARE_GATE"]
+           "linearised_modes", "mode_measures", "MODE_GATE"]
 
-#: linear_driven_modes takes the driven-sprocket mode among the modes whose share of the
-#: driven sprocket's rotation in their kinetic energy is at least this times the largest
-#: (C3: the string mode at 7.67 Hz has 0.07 of the 16.31 Hz mode's share; xu2010's shaft mode
-#: 0.65 of its 601 Hz mode's, a sagging 08B chain's 209 Hz mode 0.70 of the largest)
-SHARE_GATE = 0.5
+#: linear_driven_modes takes the driven-sprocket mode among the modes whose response
+#: (mode_measures: the square of the driven sprocket's speed in the mode when the drive is set
+#: moving in the static wrap's shape) is at least this times the largest (C3: the string mode
+#: at 7.67 Hz has 0.10 of the 16.31 Hz mode's response; B3's 9.8 and 13.3 Hz modes 0.89 of
+#: each other's, both kept; a 16A 13/13 drive's 93.6 Hz mode 0.25 of a 1.82 kHz
+#: roller mode's share, but 7e5 times its response)
+MODE_GATE = 0.5
 #: modes whose frequencies differ by at most this fraction count as one (_clusters): xu2010 at
 #: its tight centre distance splits its two spans' string modes by 0.06-0.35 % near 170 Hz, and
 #: their shapes (and with them each one's share) turn within their plane from one pretension or
@@ -390,15 +392,27 @@ def _condensed_modes(k, mass, keep):
     return lam, T @ vec
 
 
-def mode_measures(lam, phi, mass, driven: int, ref) -> tuple[np.ndarray, np.ndarray]:
-    """(share, mac) per mode: J_2 phi_2^2 / (phi^T M phi), the share of the driven sprocket's
-    rotation (coordinate ``driven``) in the mode's kinetic energy (phi_2^2 of the
-    mass-normalised shape is its driving-point residue), and the mass-weighted modal assurance
-    criterion against ``ref`` (Allemang & Brown 1982); both -1 where ``lam`` <= 0."""
+def mode_measures(lam, phi, mass, driven: int, ref
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(share, mac, response) per mode; all -1 (response 0) where ``lam`` <= 0.
+
+    share: J_2 phi_2^2 / (phi^T M phi), the driven sprocket's rotation's (coordinate
+    ``driven``) part of the mode's kinetic energy (phi_2^2 of the mass-normalised shape is its
+    driving-point residue). mac: the mass-weighted modal assurance criterion against ``ref``
+    (Allemang & Brown 1982). response: the driven sprocket's speed in the mode when the drive
+    starts from rest position with velocity ``ref`` - modal velocity phi^T M ref / (phi^T M
+    phi), times phi_2 - scaled by sqrt(J_2 / ref^T M ref); signed, so that the modes of a
+    near-degenerate group add (:func:`_driven_mode`), response^2 = share x mac, and over every
+    mode the responses sum to the driven sprocket's own value sqrt(J_2 / ref^T M ref) ref_2 (the
+    modal expansion of the initial velocity, at t = 0)."""
     norm = np.einsum("i,ij,ij->j", mass, phi, phi)
+    proj = phi.T @ (mass * ref)
+    ref_norm = float(ref @ (mass * ref))
     share = np.where(lam > 0.0, mass[driven] * phi[driven] ** 2 / norm, -1.0)
-    mac = np.where(lam > 0.0, (phi.T @ (mass * ref)) ** 2 / (norm * (ref @ (mass * ref))), -1.0)
-    return share, mac
+    mac = np.where(lam > 0.0, proj ** 2 / (norm * ref_norm), -1.0)
+    response = np.where(lam > 0.0, math.sqrt(mass[driven] / ref_norm) * phi[driven] * proj
+                        / norm, 0.0)
+    return share, mac, response
 
 
 def _clusters(lam) -> list[np.ndarray]:
@@ -417,27 +431,36 @@ def _clusters(lam) -> list[np.ndarray]:
 
 
 def _driven_mode(lam, phi, mass, driven: int, ref, near=None) -> float:
-    """omega [rad/s] of the driven-sprocket mode: of the positive modes whose share
-    (:func:`mode_measures`) is at least ``SHARE_GATE`` times the largest, the one with the
-    largest MAC against ``ref``, or with ``near`` [rad/s] the one nearest ``near``. Modes within
-    ``DEGENERATE`` of each other count as one (:func:`_clusters`): its share and MAC are their
-    sums (over M-orthonormal shapes both are invariant under a rotation within the group: the
-    driving-point residue and the squared projection of ``ref`` on the group), its omega^2 their
-    share-weighted mean (continuous where two modes veer and exchange their shares). ValueError
-    where no positive mode turns the driven sprocket."""
-    share, mac = mode_measures(lam, phi, mass, driven, ref)
+    """omega [rad/s] of the driven-sprocket mode: of the positive modes whose response
+    (:func:`mode_measures`, squared) is at least ``MODE_GATE`` times the largest, the one
+    with the largest MAC against ``ref``; or with ``near`` [rad/s], of those and the ones whose
+    share is at least ``MODE_GATE`` times the largest, the one nearest ``near``.
+    Modes within ``DEGENERATE`` of each other count as one (:func:`_clusters`): its response is
+    the sum of theirs, its MAC and share the sums of theirs (over M-orthonormal shapes all three
+    are invariant under a rotation within the group: the projection of the initial velocity on
+    the group, read at the driven sprocket; the squared projection of ``ref`` on it; the
+    driving-point residue), its omega^2 their share-weighted mean (continuous where two modes
+    veer and exchange their shares). ValueError where no positive mode turns the driven
+    sprocket."""
+    share, mac, response = mode_measures(lam, phi, mass, driven, ref)
     groups = _clusters(lam)
     g_share = np.array([share[g].sum() for g in groups])
     g_mac = np.array([mac[g].sum() for g in groups])
-    if not (g_share.size and g_share.max() > 0.0):
+    g_response = np.array([response[g].sum() for g in groups]) ** 2
+    if not (g_share.size and g_share.max() > 0.0 and g_response.max() > 0.0):
         raise ValueError("level 3 linearised at rest has no positive mode in the driven "
                          "sprocket")
     g_omega = np.array([math.sqrt(float(share[g] @ lam[g]) / float(share[g].sum()))
                         if share[g].sum() > 0.0 else math.sqrt(float(lam[g].mean()))
                         for g in groups])
-    gated = np.flatnonzero(g_share >= SHARE_GATE * g_share.max())
+    gated = g_response >= MODE_GATE * g_response.max()
     if near is not None:
+        # ref itself may be the other mode here (a flexible shaft's two static modes swap
+        # their shares between driver positions), so a mode that turns the driven sprocket
+        # by its share alone also counts
+        gated = np.flatnonzero(gated | (g_share >= MODE_GATE * g_share.max()))
         return float(g_omega[gated[np.argmin(np.abs(np.log(g_omega[gated] / near)))]])
+    gated = np.flatnonzero(gated)
     return float(g_omega[gated[np.argmax(g_mac[gated])]])
 
 
@@ -465,26 +488,32 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
     roller's inertia, 601.5 Hz so, 568.4 Hz with none), and on a sagging chain the static
     secant is its sag's, which a span above its string modes does not give. The mode returned
-    is, of this model's modes that turn the driven sprocket (a share J_2 phi_2^2 / (phi^T M
-    phi) of their kinetic energy at least ``SHARE_GATE`` times the largest; phi_2^2 of the
-    mass-normalised shape is the mode's driving-point residue), the one with the largest
-    mass-weighted modal assurance criterion against the static one's shape (the same mode,
-    moved by the spans' inertia; Allemang & Brown, 1982). Without the gate, on a long sagging
-    span, whose static shape is mostly its sag's, the closest shape was a string mode that
-    hardly turns the sprocket (C3: 7.67 Hz with 6 % of its energy in the driven sprocket,
-    against 16.31 Hz with 91 %; the 21/63-tooth ``fine``: 7.76 Hz, 0.3 %, against 45.4 Hz, 71
-    %; level 3's own ring-down: 14.5-16.1 Hz and 45.6 Hz; docs/reduced_models.md "Which
-    mode is the driven sprocket's"). Without the MAC, the largest share alone took a mode
-    level 3's ring-down does not show on a sagging 08B chain (567 Hz, against its 209 Hz).
+    is, of this model's modes that the static wrap's motion excites in the driven sprocket (a
+    response at least ``MODE_GATE`` times the largest: :func:`mode_measures`, the driven
+    sprocket's speed in the mode when the drive is set moving in the static mode's shape;
+    response^2 = share x MAC), the one with the largest mass-weighted modal assurance criterion
+    against the static one's shape (the same mode, moved by the spans' inertia; Allemang &
+    Brown, 1982). Without a gate, on a long sagging span, whose static shape is mostly its
+    sag's, the closest shape was a string mode that hardly turns the sprocket (C3: 7.67 Hz with
+    6 % of its energy in the driven sprocket, against 16.31 Hz with 91 %; the 21/63-tooth
+    ``fine``: 7.76 Hz, 0.3 %, against 45.4 Hz, 71 %; level 3's own ring-down: 14.5-16.1 Hz and
+    45.6 Hz; docs/reduced_models.md "Which mode is the driven sprocket's"). Without the MAC, the
+    largest share alone took a mode level 3's ring-down does not show on a sagging 08B chain
+    (567 Hz, against its 209 Hz), and a gate on the share alone lost the torsional mode where a
+    kHz mode of the span rollers beside the sprocket holds the largest share with none of the
+    wrap's shape (16A 13/13: 93.6 Hz holds 0.25 of the 1.82 kHz mode's share, but 7e5 times its
+    response; docs/reduced_models.md "The gate on the response").
     Condensing the seated rollers also removes the local modes of a light sprocket rattling
     against its own rollers at kHz.
-    ``near`` [rad/s]: take, of the gated modes, the one nearest this omega instead (the same
-    mode at another driver position, where the shares of a flexible shaft's two modes may
-    swap: xu2010 with half its contact stiffness). Modes within ``DEGENERATE`` of each other
-    are taken as one (:func:`_driven_mode`): xu2010 at its tight centre distance has its two
-    spans' string modes 0.06-0.35 % apart at 168-172 Hz, their shapes turned within their plane
-    from one position to the next, and one of the pair alone fell below the gate at some
-    pretensions (451 N: 535 Hz taken, against 171.7 Hz at 450 and 452 N).
+    ``near`` [rad/s]: take, of the gated modes and those whose share is at least
+    ``MODE_GATE`` times the largest, the one nearest this omega instead (the same mode at
+    another driver position, where the shares of a flexible shaft's two modes may swap and the
+    static mode's shape with them: xu2010 with half its contact stiffness). Modes within
+    ``DEGENERATE`` of each other are taken as one (:func:`_driven_mode`): xu2010 at its tight
+    centre distance has its two spans' string modes 0.06-0.35 % apart at 168-172 Hz, their
+    shapes turned within their plane from one position to the next, and one of the pair alone
+    fell below the share gate at some pretensions (451 N: 535 Hz taken, against 171.7 Hz at 450
+    and 452 N).
     Checked against level 3's own ring-down on C1, xu2010 and unseen drives
     (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
     static stiffness is singular or no positive mode exists."""

@@ -251,7 +251,7 @@ def _tooth_mean_mode(model, rests) -> tuple[float, int]:
     the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
     stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
     see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
-    those with a comparable share in the driven sprocket (``near``)."""
+    those with a comparable response or share in the driven sprocket (``near``)."""
     from .multibody_statics import linear_driven_modes
     omega = linear_driven_modes(model, rests[0])[0]
     omegas = [omega]

@@ -206,7 +206,7 @@ def clearance():
 def modes():
     """Level 3 linearised at rest (multibody_statics.linearised_modes): every mode with at
     least 2 % of its kinetic energy in the driven sprocket's rotation or a MAC of 0.1 against
-    the static wrap's shape, the mode linear_driven_modes takes, the spans' first string mode
+    the static wrap's shape, with its response (multibody_statics.mode_measures), the mode linear_driven_modes takes, the spans' first string mode
     (1 / 2L) sqrt(T_0 / rho), and level 3's ring-down after a sudden start to 1 and 5 rpm within
     0.6-1.4 x the mode taken (docs/reduced_models.md, "Which mode is the driven sprocket's")."""
     import math
@@ -225,7 +225,7 @@ def modes():
         model = load_scene(name, fidelity=3).with_overrides(over, fidelity=3).model()
         rest = MS.static_state(model)
         lam, phi, mass, driven, ref, omega_s = MS.linearised_modes(model, rest)
-        share, mac = MS.mode_measures(lam, phi, mass, driven, ref)
+        share, mac, response = MS.mode_measures(lam, phi, mass, driven, ref)
         taken = MS.linear_driven_modes(model, rest)[0]
         d, p = model.drive, model.params
         span = normal_weights(d, p)[0][1]
@@ -239,7 +239,7 @@ def modes():
         for i in np.flatnonzero((share > 0.02) | (mac > 0.1)):
             tag = "  <- taken" if abs(math.sqrt(lam[i]) - taken) < 1e-9 * taken else ""
             print(f"  {math.sqrt(lam[i]) / (2 * math.pi):9.2f} Hz  share {share[i]:.3f}  "
-                  f"MAC {mac[i]:.3f}{tag}", flush=True)
+                  f"MAC {mac[i]:.3f}  response^2 {response[i] ** 2:.3f}{tag}", flush=True)
 
 
 def loaded(load=43.2):
