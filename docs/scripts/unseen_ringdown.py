@@ -13,7 +13,7 @@ its size against the peak inside the band: a check of the mode picked that does 
 it (on a hanging chain the spans' sag modes ring too, below the band). A drive whose scene or
 fit is refused prints why.
 
-    python docs/scripts/unseen_ringdown.py      # about 1-2 min with warm kernels
+    python docs/scripts/unseen_ringdown.py      # about 11 s with warm kernels
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ WIDE = (10.0, 5000.0)
 
 def main():
     print(f"{'drive':22s} {'T0 [N]':>7s} {'Km/K3':>6s} {'L3 lin.':>8s} {'L3 ring':>8s} "
-          f"{'L3 wide':>13s} {'L1 option':>16s} {'L2 option':>16s} {'L1 ladder':>16s}")
+          f"{'L3 wide':>13s} {'L1 wrap':>16s} {'L2 wrap':>16s} {'L1 ladder':>16s}")
     for path in DRIVES:
         try:
             sc = load_scene(str(path), fidelity=1, **ON)
