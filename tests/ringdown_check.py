@@ -26,9 +26,13 @@ import chainmodel
 def ring(name, level, band, rpm=5.0, **kw) -> float:
     """Frequency [Hz] of the driven speed's ring-down (module docstring) within ``band``, after
     a sudden start to ``rpm``."""
-    r = chainmodel.simulate(name, fidelity=level, input_speed_rpm=rpm, ramp_time=0.0,
-                            load_torque=0.0, duration=0.5, output_interval=5e-5, **kw)
-    return peak_frequency(r, band)
+    return peak_frequency(ring_run(name, level, rpm, **kw), band)
+
+
+def ring_run(name, level, rpm=5.0, **kw):
+    """The run :func:`ring` reads: a sudden start to ``rpm`` without load, 0.5 s."""
+    return chainmodel.simulate(name, fidelity=level, input_speed_rpm=rpm, ramp_time=0.0,
+                               load_torque=0.0, duration=0.5, output_interval=5e-5, **kw)
 
 
 def spectrum(result) -> tuple[np.ndarray, np.ndarray]:

@@ -45,6 +45,7 @@ from scipy.sparse.linalg import splu
 from ..kernels import multibody_layout as K
 from ..kernels.multibody_forces import accel, link_potential
 from ..kernels.multibody_outputs import span_ends
+from . import modal_assurance
 from .base import Inputs
 
 __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_modes",
@@ -406,13 +407,11 @@ def mode_measures(lam, phi, mass, driven: int, ref
     mode the responses sum to the driven sprocket's own value sqrt(J_2 / ref^T M ref) ref_2 (the
     modal expansion of the initial velocity, at t = 0)."""
     norm = np.einsum("i,ij,ij->j", mass, phi, phi)
-    proj = phi.T @ (mass * ref)
     ref_norm = float(ref @ (mass * ref))
     share = np.where(lam > 0.0, mass[driven] * phi[driven] ** 2 / norm, -1.0)
-    mac = np.where(lam > 0.0, proj ** 2 / (norm * ref_norm), -1.0)
-    response = np.where(lam > 0.0, math.sqrt(mass[driven] / ref_norm) * phi[driven] * proj
-                        / norm, 0.0)
-    return share, mac, response
+    response = np.where(lam > 0.0, math.sqrt(mass[driven] / ref_norm) * phi[driven]
+                        * (phi.T @ (mass * ref)) / norm, 0.0)
+    return share, modal_assurance.mac(lam, phi, mass, ref), response
 
 
 def _clusters(lam) -> list[np.ndarray]:

@@ -21,13 +21,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import chainmodel
 from chainmodel.models.wrap_statics import wrap_fit
 from chainmodel.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests"))
-from ringdown_check import peak_frequency, ring, spectrum  # noqa: E402
+from ringdown_check import peak_frequency, ring, ring_run, spectrum  # noqa: E402
 
 DRIVES = ([ROOT / "examples" / "scenes" / n for n in
            ("12b_conveyor.toml", "16b_mixer.toml", "08b_fan_1500rpm.toml")]
@@ -47,8 +46,7 @@ def main():
             print(f"{path.stem:22s} refused: {exc}", flush=True)
             continue
         band = (0.6 * fit.mode, 1.4 * fit.mode)
-        r3 = chainmodel.simulate(str(path), fidelity=3, input_speed_rpm=5.0, ramp_time=0.0,
-                                 load_torque=0.0, duration=0.5, output_interval=5e-5)
+        r3 = ring_run(str(path), 3)
         f3 = peak_frequency(r3, band)
         wide = peak_frequency(r3, WIDE)
         f, amp = spectrum(r3)
