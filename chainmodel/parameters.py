@@ -229,7 +229,8 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("torsional.wrap_statics", True, "",
        "at levels 0-2 take each span end's compliance, free length and a floor under the slack "
        "span from level 3 of the same drive (its rollers, links, seats with clearance and "
-       "flanks, gravity): the static tension is level 3's static equilibrium's, the driven "
+       "flanks, gravity): the spans hold level 3's static tension, its mean over a driver "
+       "tooth period (the one reported is its value at driver angle 0), the driven "
        "sprocket's torsional mode of each level linearised at rest level 3's linear one (its "
        "statics and span rollers' inertia; their means over a driver tooth period) "
        "and the loaded split at rest follows level 3's statics (docs/reduced_models.md, \"One "

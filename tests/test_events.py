@@ -21,6 +21,21 @@ def test_rk4_across_seating_release_and_slack_events_converges_to_dop853():
     ref = simulation.run_scene(sc.with_overrides(solver_method="dop853", solver_rtol=1e-11))
     r = simulation.run_scene(sc.with_overrides(solver_step=1e-3 / 8))
     assert ref.stats["events"] > 30
-    assert r.stats["events"] == ref.stats["events"]
+    # the same events at the same instants: two switching functions crossing at one instant
+    # (a seating on one span as a roller leaves the other) are one located event for RK4 and
+    # two for DOP853's event search, so the distinct times are compared
+    times = [_distinct_event_times(sc.with_overrides(**kw)) for kw in
+             (dict(solver_method="dop853", solver_rtol=1e-11), dict(solver_step=1e-3 / 8))]
+    assert len(times[0]) == len(times[1]) > 30
+    np.testing.assert_allclose(times[1], times[0], rtol=0, atol=1e-7)
     assert np.max(np.abs(r["driven.angle"] - ref["driven.angle"])) < 1e-8
     assert np.sqrt(np.mean((r["tight_span.tension"] - ref["tight_span.tension"]) ** 2)) < 1e-3
+
+
+def _distinct_event_times(sc) -> np.ndarray:
+    """The instants [s] at which the stepper of ``sc`` located an event, each once."""
+    stepper = sc.stepper(sc.model())
+    for t in sc.times()[1:]:
+        stepper.advance(float(t), sc.inputs)
+    log = np.sort(np.asarray(stepper.event_log, float))
+    return log[np.concatenate([[True], np.diff(log) > 1e-7])]

@@ -352,14 +352,15 @@ def test_item6_centrifugal_tension_on_the_wrap_fits_spans(level):
     """With level 3's wrap (torsional.wrap_statics, the default) the slack span's floor makes
     the span law nonlinear, so the sum of the spans is not conserved under load; the
     centrifugal tension shows instead as what each span gains between 200 and 2000 rpm under
-    the same load: rho A (v_2000^2 - v_200^2) = 177 N, within 10 % (the floor bends the law,
-    and at level 2 the string modes' vibration adds to both spans: measured +4.5 / +3.5 % at
-    level 1, +8.4 / +7.5 % at level 2), the same on both spans (the torque balance), and the
-    input torque still does not see it."""
+    the same load: rho A (v_2000^2 - v_200^2) = 177 N, within 12 % (the floor bends the law,
+    and at level 2 the string modes' vibration adds to both spans: measured +5.8 / +4.8 % at
+    level 1, +10.7 / +9.7 % at level 2; +4.5 / +3.5 and +8.4 / +7.5 % before the spans held
+    level 3's tooth-period mean), the same on both spans (the torque balance), and the input
+    torque still does not see it."""
     lo, hi = _steady_spans(level, 200), _steady_spans(level, 2000)
     rise = hi[3] - lo[3]
-    assert hi[0] - lo[0] == pytest.approx(rise, rel=0.10)
-    assert hi[1] - lo[1] == pytest.approx(rise, rel=0.10)
+    assert hi[0] - lo[0] == pytest.approx(rise, rel=0.12)
+    assert hi[1] - lo[1] == pytest.approx(rise, rel=0.12)
     assert hi[0] - lo[0] == pytest.approx(hi[1] - lo[1], rel=0.02)
     for run in (lo, hi):
         assert run[2] == pytest.approx(43.2 * 25 / 17, rel=0.03)

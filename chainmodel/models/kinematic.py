@@ -138,6 +138,13 @@ class KinematicModel(Model):
         return self._static_tension
 
     @cached_property
+    def _held_tension(self) -> float:
+        """What the spans carry at rest (wrap_statics.held_span_tension: with the wrap fit level
+        3's tooth-period mean, else the static tension)."""
+        from .wrap_statics import held_span_tension
+        return held_span_tension(self.drive, self.params)
+
+    @cached_property
     def _floor(self) -> float:
         """The wrap fit's floor b [N] under the slack span (torsional.wrap_statics, where
         honoured; span_ends gives 0, the linear law, everywhere else)."""
@@ -146,10 +153,11 @@ class KinematicModel(Model):
 
     @cached_property
     def _raw_sum(self) -> float:
-        """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T0,
-        or 2 (T0 - b^2 / T0) under the floor b (the raw tension whose floored value is T0)."""
+        """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T_h,
+        or 2 (T_h - b^2 / T_h) under the floor b (the raw tension whose floored value is T_h),
+        T_h the tension the spans hold at rest (:attr:`_held_tension`)."""
         from .wrap_statics import raw_tension
-        return 2.0 * raw_tension(self._static_tension, self._floor)
+        return 2.0 * raw_tension(self._held_tension, self._floor)
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()

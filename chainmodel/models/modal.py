@@ -78,7 +78,7 @@ class ModalModel(TorsionalModel):
     def _complete_parameters(self) -> None:
         """Refuse a chain without tension at rest, then fill the string modes' parameters."""
         drive = self.drive
-        t0 = self.static_tension()
+        t0 = self.held_tension()
         from .kinematic import loose_chain_error
         loose = loose_chain_error(drive, self.params)
         # a chain longer than its wrap: refused unless level 3's statics hold its ends (its
@@ -149,15 +149,15 @@ class ModalModel(TorsionalModel):
         """Static sag under gravity at the static tension (linear), zero velocities."""
         n, P = self.n_modes, self.P
         g = galerkin_coefficients(n)["G"]
-        t0 = self.static_tension()
+        t0 = self.held_tension()
         q_u = P[S.P_GN_U] * g / self.modal_frequencies(t0, 0.0, "upper") ** 2
         q_l = P[S.P_GN_L] * g / self.modal_frequencies(t0, 0.0, "lower") ** 2
         return np.concatenate([q_u, q_l, np.zeros(2 * n)])
 
     def omega_max(self, x=None) -> float:
         # span modes at four times the static tension (the tight span carries the load too)
-        w_modes = float(np.max(self.modal_frequencies(4.0 * self.static_tension(), 0.0, "upper")))
-        w_modes = max(w_modes, float(np.max(self.modal_frequencies(4.0 * self.static_tension(),
+        w_modes = float(np.max(self.modal_frequencies(4.0 * self.held_tension(), 0.0, "upper")))
+        w_modes = max(w_modes, float(np.max(self.modal_frequencies(4.0 * self.held_tension(),
                                                                      0.0, "lower"))))
         return max(super().omega_max(x), w_modes)
 
@@ -184,7 +184,7 @@ class ModalModel(TorsionalModel):
         """The likeliest cause of a span amplitude beyond the string model, in words, from the
         state (with a rigid shaft the driver speed is not in it: then all candidates)."""
         d, r = self.drive, self.reference
-        t0 = self.static_tension()
+        t0 = self.held_tension()
         f1 = float(np.min([self.modal_frequencies(t0, 0.0, s)[0] for s in ("upper", "lower")])
                    ) / (2 * math.pi)
         kick = max(R * (1 - math.cos(math.pi / n)) for R, n in

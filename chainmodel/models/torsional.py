@@ -53,7 +53,8 @@ from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_series_compliance, seat_stiffness
-from .wrap_statics import honoured, span_ends, span_sag_terms, static_span_tension
+from .wrap_statics import (held_span_tension, honoured, span_ends, span_sag_terms,
+                           static_span_tension)
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
 
@@ -325,12 +326,25 @@ class TorsionalModel(Model):
 
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
-        """Static span tension at rest with no load [N], shared with level 0
-        (:func:`~chainmodel.models.kinematic.static_span_tension`, seat compliance included).
-        Computed once per model (its parameters are fixed): level 2 asks for it five times."""
+        """Static span tension at rest with no load [N], the drive's (driver at angle 0; with
+        ``torsional.wrap_statics`` level 3's there), shared with level 0
+        (:func:`~chainmodel.models.wrap_statics.static_span_tension`). What the spans carry
+        at rest is :meth:`held_tension`. Computed once per model (its parameters are fixed)."""
         cached = self.__dict__.get("_static_tension_value")
         if cached is None:
             cached = self.__dict__["_static_tension_value"] = static_span_tension(
+                self.drive, self.params)
+        return cached
+
+    def held_tension(self) -> float:
+        """The tension the spans carry at rest, no load [N] (over a tooth period the polygon
+        moves them about it): with ``torsional.wrap_statics`` level 3's tooth-period mean
+        (:func:`~chainmodel.models.wrap_statics.held_span_tension`), which differs from
+        :meth:`static_tension` (level 3's at driver angle 0) by level 3's own polygonal
+        variation; else the static tension."""
+        cached = self.__dict__.get("_held_tension_value")
+        if cached is None:
+            cached = self.__dict__["_held_tension_value"] = held_span_tension(
                 self.drive, self.params)
         return cached
 

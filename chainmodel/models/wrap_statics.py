@@ -30,22 +30,30 @@ at angle 0):
   their rollers do not follow their static shapes, and that moves the mode by +5 % (C1,
   xu2010) to a factor of 4 in stiffness (a sagging chain, whose static secant is its sag's);
   docs/reduced_models.md, "Item 3, the torsional mode: one wrap";
-* the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_0 R_o,
-  at which the raw law's slack span would carry SLACK_SHARE T_0, its mean over ``ANGLES``
-  driver positions in a tooth period: level 1's law at rest under M_a gives it (the wrap passes the tight span's tension round to the slack span's end, so level
-  3's span tensions' sum rises under load; docs/reduced_models.md); level 2's own fit takes
-  its strings' sag S_N / T^2 into that law (:func:`_floored`), so the floor does not hold the
-  weight a second time ("Level 2's floor and its strings' sag"); a = 0 where the floor cannot
-  match (a sagging chain, whose slack span hardly loses tension) or no loaded equilibrium is
-  found;
-* the static span tension T_0 (mean of the two spans' middle links at rest, no load) and
-  levels 0-2's static law T_0 = floor((X - 2 f) / (D + 2 c)) (static_tension.static_numerator's
-  X, D without seats) give f.
+* the held tension T_h: the mean of level 3's static tension (the two spans' middle links at
+  rest, no load) over ``ANGLES`` driver positions in a tooth period. Level 3's equilibria move
+  over a tooth (xu2010 520-558 N, mean 540 N, 526 N at angle 0; C1 373-532 N, mean 450 N,
+  500 N at angle 0) and levels 1-2's spans move about what their law holds by their own
+  polygon, so the law holds the mean, not the angle-0 value (docs/reduced_models.md, "The held
+  tension is level 3's tooth-period mean"); T_0 at angle 0 where a position has no
+  equilibrium, or where the mean leaves no plausible ends (then a warning, :func:`fallbacks`);
+* the floor a from level 3's slack span under the load M_a = (1 - ``SLACK_SHARE``) 2 T_h R_o,
+  at which the raw law's slack span would carry SLACK_SHARE T_h, its mean over the same
+  driver positions: level 1's law at rest under M_a gives it (the wrap passes the tight span's
+  tension round to the slack span's end, so level 3's span tensions' sum rises under load;
+  docs/reduced_models.md); level 2's own fit takes its strings' sag S_N / T^2 into that law
+  (:func:`_floored`), so the floor does not hold the weight a second time ("Level 2's floor
+  and its strings' sag"); a = 0 where the floor cannot match (a sagging chain, whose slack span
+  hardly loses tension) or no loaded equilibrium is found;
+* T_h and levels 0-2's static law T_h = floor((X - 2 f) / (D + 2 c)) (static_tension.
+  static_numerator's X, D without seats) give f.
 
-So levels 0-2 have level 3's static tension by construction, sag, clearance and the flanks'
-tension decay around the wrap included, level 1's driven-sprocket mode is level 3's over a
-tooth period and its loaded split at rest follows level 3's. Computed once per (drive,
-parameters): 3 + 4 x 5 static solves and four linearisations.
+So levels 0-2 hold level 3's static tension by construction, its tooth-period mean, sag,
+clearance and the flanks' tension decay around the wrap included; they report level 3's
+static tension at angle 0, the scene's (:func:`static_span_tension`). Level 1's
+driven-sprocket mode is level 3's over a tooth period and its loaded split at rest follows
+level 3's. Computed once per (drive, parameters): 3 + 4 x 5 static solves and four
+linearisations.
 """
 
 from __future__ import annotations
@@ -64,7 +72,8 @@ from .chain_inertia import sprocket_mass_matrix, two_inertia_stiffness
 from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension",
-           "weighted_static_tension", "weighted", "span_sag_terms", "modal_stiffness", "softplus",
+           "held_span_tension", "weighted_static_tension", "weighted", "span_sag_terms",
+           "modal_stiffness", "softplus",
            "LOAD_STEP", "SLACK_SHARE", "sag_tension", "unavailable", "honoured", "fallbacks",
            "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
            "span_elastic_compliance", "raw_tension"]
@@ -109,7 +118,11 @@ class WrapFit:
     driver held); upper, lower: the two span tensions at rest [N]; solves_wall: seconds spent;
     softness: the floor a [N]; loaded_slack: level 3's slack span it is fitted to [N];
     modal_stiffness: K_m [N m/rad], the stiffness c is fitted to; mode: level 3's linear
-    driven-sprocket mode [Hz] (nan where none was found: K_m is then K_3)."""
+    driven-sprocket mode [Hz] (nan where none was found: K_m is then K_3); held_tension: T_h
+    [N], level 3's static tension's mean over ``ANGLES`` driver positions in a tooth period,
+    which the law (c, f, a) holds at rest (T_0 where a position has no equilibrium or the
+    mean gives no plausible ends); split_difference: the tension difference [N] under which
+    level 3's slack span ``loaded_slack`` was taken."""
     compliance: float
     free_length: float
     static_tension: float
@@ -121,6 +134,8 @@ class WrapFit:
     loaded_slack: float = float("nan")
     modal_stiffness: float = float("nan")
     mode: float = float("nan")
+    held_tension: float = float("nan")
+    split_difference: float = float("nan")
 
 
 #: parameters no fit reads: the statics and the linear modes are taken at zero velocity and
@@ -186,11 +201,8 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
                 raise
     k3 = 2.0 * dm / abs(minus.driven_angle - plus.driven_angle)
     wall = rest.wall + plus.wall + minus.wall
-    # the loaded split: level 3's slack span at a load that would take a linear law's slack
-    # span to SLACK_SHARE of T_0
-    m_b = (1.0 - SLACK_SHARE) * 2.0 * t0 * ro
     # the driver at ANGLES positions over a tooth period, as level 1's tooth-period-mean link
-    # counts see the chain: the loaded split's and the mode's means
+    # counts see the chain: the held tension's, the loaded split's and the mode's means
     rests = [rest]
     try:
         for angle in tooth_positions(drive)[1:]:
@@ -198,6 +210,18 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
             wall += rests[-1].wall
     except ValueError:  # positions with no equilibrium: the loaded split has no mean there
         pass
+    # what levels 0-2's spans hold at rest: level 3's tooth-period mean (module docstring)
+    if len(rests) == ANGLES:
+        t_held, held_note = float(np.mean([r.mean_tension for r in rests])), None
+    else:
+        t_held = t0
+        held_note = (f"levels 0-2's spans hold level 3's static tension at driver angle 0 "
+                     f"({t0:.4g} N), not its tooth-period mean: level 3's statics found no "
+                     f"equilibrium at one of the {ANGLES} driver positions in a tooth period "
+                     f"that the mean takes")
+    # the loaded split: level 3's slack span at a load that would take a linear law's slack
+    # span to SLACK_SHARE of the held tension
+    m_b = (1.0 - SLACK_SHARE) * 2.0 * t_held * ro
     slack3 = None
     if len(rests) == ANGLES:
         try:
@@ -233,9 +257,27 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
                 f"matters")
         else:
             _FELL_BACK.pop((None,) + key, None)
-    c, f, b = _ends(drive, p3, t0, slack3, km)
+    dt = m_b / ro
+    try:
+        c, f, b = _ends(drive, p3, t_held, slack3, km, dt)
+    except ValueError as exc:
+        if t_held == t0:
+            raise
+        # the tooth-period mean leaves the spans too soft at rest for level 3's mode (a floor
+        # fitted under a low mean): the ends hold the angle-0 tension, as before the mean
+        c, f, b = _ends(drive, p3, t0, slack3, km, dt)
+        held_note = (f"levels 0-2's spans hold level 3's static tension at driver angle 0 "
+                     f"({t0:.4g} N), not its tooth-period mean ({t_held:.4g} N): on the mean "
+                     f"{exc} (their running span means then sit off level 3's by the "
+                     f"difference)")
+        t_held = t0
+    if held_note is None:
+        _FELL_BACK.pop(("held",) + key, None)
+    else:
+        _FELL_BACK[("held",) + key] = held_note
     return WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
-                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi))
+                   float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi),
+                   t_held, dt)
 
 
 def tooth_positions(drive: Drive) -> np.ndarray:
@@ -264,11 +306,12 @@ def _tooth_mean_mode(model, rests) -> tuple[float, int]:
 
 
 def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
-          stiffness: float, sags: tuple[float, float] = (0.0, 0.0)
+          stiffness: float, dt: float, sags: tuple[float, float] = (0.0, 0.0)
           ) -> tuple[float, float, float]:
     """(c, f, a) of the span law at rest: c with which level 1's law stiffens the driven
-    sprocket by ``stiffness`` [N m/rad], a with which its slack span under the load M_a is
-    level 3's ``slack3`` (None: no floor), f with which it holds T_0 at rest (module
+    sprocket by ``stiffness`` [N m/rad], a with which its slack span under the tension
+    difference ``dt`` (the load M_a / R_o) is level 3's ``slack3`` there (None: no floor), f
+    with which it holds ``t0`` at rest (module
     docstring; the floor's slope and c fixed in turn, four passes). ``sags`` [N^2 m]: the sag
     terms (S_upper, S_lower) the level's own span law adds (level 2's strings): the slack span
     under M_a is then the law's with them, so the floor does not hold the weight a second time."""
@@ -278,7 +321,6 @@ def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | No
     n_up, n_low = float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
     excess, links = ST.rest_geometry(drive)
     x = excess + links * params["chain.pretension"] / k
-    dt = (1.0 - SLACK_SHARE) * 2.0 * t0
     target = stiffness / (ro * ro)
     b = 0.0
     c = _compliance(target, n_up, n_low, k, 1.0, 1.0)
@@ -365,8 +407,9 @@ def span_ends(drive: Drive, params: Mapping[str, Any], *, stretch: float = 0.0,
             c, f, a = fit.compliance, fit.free_length, fit.softness
             if stiffness is not None:      # a ValueError here is the caller's (its trial)
                 slack3 = None if math.isnan(fit.loaded_slack) else fit.loaded_slack
-                c, f, a = _ends(drive, params, fit.static_tension, slack3, stiffness, sags)
-            return c, f + _given_back(stretch, fit.static_tension), a
+                c, f, a = _ends(drive, params, fit.held_tension, slack3, stiffness,
+                                fit.split_difference, sags)
+            return c, f + _given_back(stretch, fit.held_tension), a
     c, f = ST.seat_series_compliance(params, drive)
     if drive is None or drive.links is None or params["gravity"] == 0.0:
         return c, f, 0.0
@@ -463,14 +506,20 @@ def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | Non
 
 
 def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None) -> list[str]:
-    """Where ``torsional.wrap_statics`` was honoured at levels 1-2 on a weaker fit than its
-    own (sentences, empty if none): level 3 had no linear mode (:func:`wrap_fit` took the static secant K_3),
-    or the model of ``level`` could not be fitted to it (:mod:`chainmodel.models.
-    torsional_mode`: the ends stay on K_m). chainmodel.validity turns each into a warning."""
-    if level in (0, 3):     # level 0 takes T_0 and the floor from the fit, no mode; level 3 its own
+    """Where ``torsional.wrap_statics`` was honoured at levels 0-2 on a weaker fit than its
+    own (sentences, empty if none): the spans hold level 3's static tension at angle 0, not its
+    tooth-period mean (levels 0-2); level 3 had no linear mode (:func:`wrap_fit` took the
+    static secant K_3), or the model of ``level`` could not be fitted to it (:mod:`chainmodel.
+    models.torsional_mode`: the ends stay on K_m; levels 1-2). chainmodel.validity turns each
+    into a warning."""
+    if level == 3:          # level 3 its own statics
         return []
-    key = (None,) + parameters_key(drive, params)
-    found = [_FELL_BACK[key]] if key in _FELL_BACK else []
+    key = parameters_key(drive, params)
+    found = [_FELL_BACK[("held",) + key]] if ("held",) + key in _FELL_BACK else []
+    if level == 0:          # level 0 takes the held tension and the floor from the fit, no mode
+        return found
+    if (None,) + key in _FELL_BACK:
+        found.insert(0, _FELL_BACK[(None,) + key])
     own = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
     if level is not None and own in _FELL_BACK:
         found.append(_FELL_BACK[own])
@@ -527,15 +576,15 @@ def sag_tension(drive: Drive, params: Mapping[str, Any]) -> float | None:
 
 def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool = True,
                         fitted: bool = True) -> float:
-    """Levels 0-2's static span tension [N]: with ``torsional.wrap_statics`` the span law at
-    rest on :func:`span_ends`' (c, f), floored (level 3's static tension by construction);
-    else :func:`weighted_static_tension` (``exact`` passed on).
+    """Levels 0-2's static span tension [N], the drive's as the scene defines it (at rest, no
+    load, driver at angle 0): with ``torsional.wrap_statics`` level 3's there (the fit's T_0;
+    the spans themselves hold level 3's tooth-period mean, :func:`held_span_tension`); else
+    :func:`weighted_static_tension` (``exact`` passed on).
 
     ``fitted=False`` with ``torsional.wrap_statics``: level 3's static tension itself
-    (:func:`sag_tension`, one static solve), which the fit holds by construction, without the
-    fit's load steps and linearisations (a scene's pretension search: its trials need only the
-    tension). Where the fit would then fail, the model holds the seat ladder's tension instead
-    and :func:`unavailable` says so."""
+    (:func:`sag_tension`, one static solve) without the fit's load steps and linearisations (a
+    scene's pretension search: its trials need only the tension). Where the fit would then
+    fail, the model holds the seat ladder's tension instead and :func:`unavailable` says so."""
     if drive.links is None:
         return ST.static_span_tension(drive, params)
     if params.get("torsional.wrap_statics") and not fitted:
@@ -543,13 +592,25 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool 
         if t3 is not None:
             return t3
     if params.get("torsional.wrap_statics"):
+        span_ends(drive, params)          # fits (or records the refusal)
+        if honoured(drive, params):
+            return wrap_fit(drive, params).static_tension
+    return weighted_static_tension(drive, params, exact=exact)
+
+
+def held_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
+    """The tension levels 0-2's span law holds at rest, no load [N] (its tooth-period-mean
+    geometry): with ``torsional.wrap_statics`` the law on :func:`span_ends`' (c, f, a),
+    floored - level 3's tooth-period mean by construction (``WrapFit.held_tension``); else the
+    static span tension (:func:`static_span_tension`), which the seat ladder holds."""
+    if drive.links is not None and params.get("torsional.wrap_statics"):
         c, f, a = span_ends(drive, params)
         if honoured(drive, params):
             k = params["chain.link_stiffness"]
             excess, links = ST.rest_geometry(drive)
             raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
             return softplus(raw, a)
-    return weighted_static_tension(drive, params, exact=exact)
+    return static_span_tension(drive, params)
 
 
 def softplus(raw: float, b: float) -> float:
