@@ -5,6 +5,7 @@ and x2 of contact stiffness and of seat clearance (trade_study.band_overrides). 
 session of issue 21, docs/reduced_models.md "The gate on the response" and "Not settled by it".
 
     python docs/scripts/mode_picker_fits.py > now.txt     # about 1 min
+    python docs/scripts/mode_picker_fits.py --held        # with the tension the spans hold
     # the same in a checkout of an older commit, then: diff old.txt now.txt
 
 ``--rule`` swaps in, for this run only, one of the two rules for the static condensation's mode
@@ -99,6 +100,8 @@ RULES = {"least-shaft-energy": least_shaft_energy, "each-static-mode": each_stat
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rule", choices=sorted(RULES))
+    ap.add_argument("--held", action="store_true",
+                    help="also print the static and the held tension of each fit")
     args = ap.parse_args(argv)
     if args.rule:
         RULES[args.rule]()
@@ -115,7 +118,13 @@ def main(argv=None):
             try:
                 sc = base if v is None else load_scene(name, fidelity=1, **kw,
                                                        **band_overrides(base, *v))
-                cell = f"{wrap_fit(sc.drive, sc.parameters).mode:.7g} Hz"
+                fit = wrap_fit(sc.drive, sc.parameters)
+                cell = f"{fit.mode:.7g} Hz"
+                if args.held and hasattr(fit, "held_tension"):
+                    # what the spans hold at rest: level 3's tooth-period mean, or where
+                    # that gives no plausible ends its tension at angle 0
+                    cell += (f"  static {fit.static_tension:.5g} N, held {fit.held_tension:.5g} N"
+                             + (" (angle 0)" if fit.held_tension == fit.static_tension else ""))
             except ValueError as exc:
                 cell = f"refused: {str(exc)[:60]}"
             print(f"{label} {tag:22s} {cell}", flush=True)
