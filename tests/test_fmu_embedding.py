@@ -109,7 +109,7 @@ def test_two_different_builds_run_side_by_side(chaindrive_fmu, second_build, tmp
         return MODEL_CLASSES[0](drive_from_parameters(params), params)
 
     def held(pretension):      # what level 0's spans carry at rest (wrap_statics.held_span_tension)
-        return level0(pretension)._held_tension
+        return level0(pretension).held_tension()
 
     def static_tension(pretension):
         return level0(pretension).static_tension()

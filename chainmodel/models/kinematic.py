@@ -139,10 +139,14 @@ class KinematicModel(Model):
 
     @cached_property
     def _held_tension(self) -> float:
-        """What the spans carry at rest (wrap_statics.held_span_tension: with the wrap fit level
-        3's tooth-period mean, else the static tension)."""
         from .wrap_statics import held_span_tension
         return held_span_tension(self.drive, self.params)
+
+    def held_tension(self) -> float:
+        """The tension the spans carry at rest, no load [N] (level 1's :meth:`~chainmodel.
+        models.torsional.TorsionalModel.held_tension`: with ``torsional.wrap_statics`` level
+        3's tooth-period mean, else the static tension)."""
+        return self._held_tension
 
     @cached_property
     def _floor(self) -> float:
@@ -155,7 +159,7 @@ class KinematicModel(Model):
     def _raw_sum(self) -> float:
         """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T_h,
         or 2 (T_h - b^2 / T_h) under the floor b (the raw tension whose floored value is T_h),
-        T_h the tension the spans hold at rest (:attr:`_held_tension`)."""
+        T_h the tension the spans hold at rest (:meth:`held_tension`)."""
         from .wrap_statics import raw_tension
         return 2.0 * raw_tension(self._held_tension, self._floor)
 

@@ -228,6 +228,9 @@ class TorqueCausalModel(Model):
     def static_tension(self) -> float:
         return self.inner.static_tension()
 
+    def held_tension(self) -> float:
+        return self.inner.held_tension()
+
     def snapshot(self, t, x, u):
         xi, ui = self._inner_inputs(x, u)
         return self.inner.snapshot(t, xi, ui)
