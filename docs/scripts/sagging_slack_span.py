@@ -7,11 +7,14 @@ Drives: two `chainmodel new-scene` drives with no pretension (10A 19/38 at 900 r
 sag (spans.py ``_tension``), level 2's string modes sag by themselves, level 3's rollers hang
 on their links.
 
-    python docs/scripts/sagging_slack_span.py      # about 10 s with warm kernels
+    python docs/scripts/sagging_slack_span.py            # about 10 s with warm kernels
+    python docs/scripts/sagging_slack_span.py --ladder   # levels 1-2 on the seat ladder
+                                                         # (torsional.wrap_statics = false)
 """
 
 from __future__ import annotations
 
+import sys
 import tempfile
 from pathlib import Path
 
@@ -33,8 +36,11 @@ def means(scene, level, **kw):
     return r.static_tension, r["tight_span.tension"][m].mean(), r["slack_span.tension"][m].mean()
 
 
+LADDER = {"torsional_wrap_statics": False} if "--ladder" in sys.argv[1:] else {}
+
+
 def row(name, scene, **kw):
-    cells = [means(scene, level, **kw) for level in (1, 2, 3)]
+    cells = [means(scene, level, **kw, **(LADDER if level < 3 else {})) for level in (1, 2, 3)]
     t3, s3 = cells[2][1:]
     text = "  ".join(f"L{level} {t:7.1f} / {s:6.1f} N ({100 * (s / s3 - 1):+5.1f} %)"
                      for level, (_, t, s) in zip((1, 2, 3), cells))
@@ -42,7 +48,8 @@ def row(name, scene, **kw):
 
 
 def main():
-    print("tight / slack span means, slack against level 3")
+    print("tight / slack span means, slack against level 3"
+          + ("; levels 1-2 on the seat ladder" if LADDER else ""))
     with tempfile.TemporaryDirectory() as tmp:
         for name, kw in NEW:
             path = Path(tmp) / "scene.toml"
