@@ -591,26 +591,29 @@ def static_span_tension(drive: Drive, params: Mapping[str, Any], *, exact: bool 
         t3 = sag_tension(drive, params)
         if t3 is not None:
             return t3
-    if params.get("torsional.wrap_statics"):
-        span_ends(drive, params)          # fits (or records the refusal)
-        if honoured(drive, params):
-            return wrap_fit(drive, params).static_tension
+    fit = _honoured_fit(drive, params)
+    if fit is not None:
+        return fit.static_tension
     return weighted_static_tension(drive, params, exact=exact)
 
 
 def held_span_tension(drive: Drive, params: Mapping[str, Any]) -> float:
     """The tension levels 0-2's span law holds at rest, no load [N] (its tooth-period-mean
-    geometry): with ``torsional.wrap_statics`` the law on :func:`span_ends`' (c, f, a),
-    floored - level 3's tooth-period mean by construction (``WrapFit.held_tension``); else the
-    static span tension (:func:`static_span_tension`), which the seat ladder holds."""
-    if drive.links is not None and params.get("torsional.wrap_statics"):
-        c, f, a = span_ends(drive, params)
-        if honoured(drive, params):
-            k = params["chain.link_stiffness"]
-            excess, links = ST.rest_geometry(drive)
-            raw = (excess + links * params["chain.pretension"] / k - 2.0 * f) / (links / k + 2.0 * c)
-            return softplus(raw, a)
-    return static_span_tension(drive, params)
+    geometry): with ``torsional.wrap_statics`` level 3's tooth-period mean, which the fitted
+    ends hold by construction (``WrapFit.held_tension``); else the static span tension
+    (:func:`static_span_tension`), which the seat ladder holds."""
+    fit = _honoured_fit(drive, params) if drive.links is not None else None
+    return fit.held_tension if fit is not None else static_span_tension(drive, params)
+
+
+def _honoured_fit(drive: Drive, params: Mapping[str, Any]) -> WrapFit | None:
+    """The wrap fit where ``torsional.wrap_statics`` is honoured (:func:`honoured`; fitting
+    it, or recording its refusal, through :func:`span_ends` as a model build does), else
+    None."""
+    if not params.get("torsional.wrap_statics"):
+        return None
+    span_ends(drive, params)
+    return wrap_fit(drive, params) if honoured(drive, params) else None
 
 
 def softplus(raw: float, b: float) -> float:
