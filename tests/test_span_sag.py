@@ -184,3 +184,19 @@ def test_the_kernels_root_is_the_cubics_in_every_regime(s):
         residual = t ** 3 - raws * t ** 2 - s
         scale = np.maximum(t ** 3, s) + np.abs(raws) * t ** 2
         assert np.max(np.abs(residual) / scale) < 1e-9
+
+
+@pytest.mark.parametrize("s", [1.0, 2.4e6])
+def test_the_fits_floored_law_is_the_cubics_root(s):
+    """wrap_statics._floored, the span law the wrap fit fits its floor a and free length with
+    (T = softplus(raw + s / T^2, a)), is the positive root of T^3 - raw T^2 - a^2 T - s = 0
+    (numpy's roots here), including raw = a = 0, where T = s^(1/3) lies on the bracket's old
+    upper end (that case raised before the margin)."""
+    from chainmodel.models.wrap_statics import _floored
+    c = s ** (1.0 / 3.0)
+    assert _floored(0.0, 0.0, s) == pytest.approx(c, rel=1e-10)
+    for raw in (-20.0 * c, -c, 0.0, 0.3 * c, c, 7.0 * c):
+        for a in (0.0, 0.1 * c, c, 5.0 * c):
+            roots = np.roots([1.0, -raw, -a * a, -s])
+            exact = max(r.real for r in roots if abs(r.imag) <= 1e-7 * abs(r))
+            assert _floored(raw, a, s) == pytest.approx(exact, rel=1e-10), (raw, a)

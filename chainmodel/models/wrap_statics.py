@@ -682,9 +682,10 @@ def _floored(raw: float, b: float, ks: float) -> float:
     if ks <= 0.0:
         return t
     from scipy.optimize import brentq
-    # g(T) = T - softplus(raw + ks / T^2, b) rises in T; <= 0 at softplus(raw, b), > 0 at hi
+    # g(T) = T - softplus(raw + ks / T^2, b) rises in T; <= 0 at softplus(raw, b), >= 0 at
+    # max(raw, 0) + b + ks^(1/3) (zero there for raw = b = 0: hence the margin)
     lo = max(t, 1e-9 * ks ** (1.0 / 3.0))
-    hi = max(raw, 0.0) + b + ks ** (1.0 / 3.0)
+    hi = max(raw, 0.0) + b + 1.5 * ks ** (1.0 / 3.0)
     return float(brentq(lambda tt: tt - softplus(raw + ks / (tt * tt), b), lo, hi,
                         xtol=1e-12 * hi, rtol=1e-13))
 
