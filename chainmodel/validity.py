@@ -101,7 +101,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "driven_reversal": "driven sprocket reversing under forward drive",
           "damper_losses": "level 3's dampers dissipate more than joint friction would",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
-          "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit"}
+          "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
+          "slack_span_sag": "slack span below level 3's on a chain hanging on its sag"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -128,13 +129,17 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
 
 def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
                            level: int | None) -> list[Problem]:
-    from .models.wrap_statics import fallbacks, unavailable
+    from .models.wrap_statics import fallbacks, slack_shortfall, unavailable
     if not params.get("torsional.wrap_statics"):
         return []
     why = unavailable(drive, params)
     if why is None:
-        return [Problem("wrap_statics_fallback", f"torsional.wrap_statics: {note}")
-                for note in fallbacks(drive, params, level)]
+        found = [Problem("wrap_statics_fallback", f"torsional.wrap_statics: {note}")
+                 for note in fallbacks(drive, params, level)]
+        short = slack_shortfall(drive, params, level)
+        if short is not None:
+            found.append(Problem("slack_span_sag", f"torsional.wrap_statics: {short}"))
+        return found
     return [Problem("wrap_statics_unavailable", (
         f"torsional.wrap_statics = true was not honoured: level 3's statics give this drive "
         f"no wrap to fit ({why}), so levels 0-2 hold their span ends with the seat ladder "
