@@ -603,3 +603,32 @@ def test_fidelity_auto_parameters_choose_the_level_and_log_why(chaindrive_fmu_di
     assert "fidelity auto: " + choice.config in log and "tradeoff.csv" in log
     log = _initialization_error(chaindrive_fmu_dir, {"auto.enabled": True, "auto.accuracy": 3.0})
     assert "accuracy" in log and "3" in log
+
+
+def test_a_chain_hanging_on_its_sag_logs_the_slack_span_warning(chaindrive_fmu_dir, tmp_path):
+    """The FMU logs levels 0-1's slack_span_sag warning (chainmodel.validity) as fmi2Warning at
+    initialization, for the 08B 13/39 drive with no pretension set through its parameters
+    (tests/test_wrap_statics.py checks that the warning's claim holds in the runs)."""
+    from chainmodel.scene import load_scene
+    from test_wrap_statics import _SAGGING_08B
+    path = tmp_path / "sagging.toml"
+    path.write_text(_SAGGING_08B)
+    sc = load_scene(str(path), fidelity=1)
+    s = Slave(chaindrive_fmu_dir)
+    try:
+        values = {}
+        for name, value in sc.parameters.items():
+            v = s.var.get(name)
+            if v is None or v.causality != "parameter" or v.type not in ("Real", "Integer"):
+                continue
+            cast = float if v.type == "Real" else int
+            if value is not None and cast(v.start) != cast(value):
+                values[name] = cast(value)
+        assert {"drive.links", "drive.pitch", "chain.link_stiffness"} <= set(values)
+        s.set_parameters(values)
+        s.fmu.exitInitializationMode()
+        warned = [m for status, m in s.log.messages
+                  if status == 1 and "falls short of level 3's" in m]
+        assert len(warned) == 1 and "level 2 or 3" in warned[0]
+    finally:
+        s.free()
