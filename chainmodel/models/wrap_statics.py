@@ -74,7 +74,8 @@ from . import static_tension as ST
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension",
            "held_span_tension", "weighted_static_tension", "weighted", "span_sag_terms",
            "modal_stiffness", "softplus",
-           "LOAD_STEP", "SLACK_SHARE", "SHORTFALL", "slack_shortfall", "sag_tension", "unavailable", "honoured", "fallbacks",
+           "LOAD_STEP", "SLACK_SHARE", "SHORTFALL", "slack_shortfall", "sag_tension",
+           "unavailable", "honoured", "fallbacks",
            "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
            "span_elastic_compliance", "raw_tension"]
 
@@ -274,7 +275,6 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
                      f"{exc} (their running span means then sit off level 3's by the "
                      f"difference)")
         t_held = t0
-    _note_shortfall(key, drive, p3, t_held, slack3, c, b, m_b, dt)
     if held_note is None:
         _FELL_BACK.pop(("held",) + key, None)
     else:
@@ -349,39 +349,36 @@ def _mean_links(drive: Drive) -> tuple[float, float]:
     return float(np.mean(g.upper_links)), float(np.mean(g.lower_links))
 
 
-def _note_shortfall(key, drive, params, t_held, slack3, c, b, m_b, dt) -> None:
-    """Record (or clear) for :func:`slack_shortfall` where levels 0-1's fitted law leaves the
-    slack span under the fit's load more than ``SHORTFALL`` below level 3's with no floor
-    (``b`` = 0: :func:`_softness` found none that reaches it at the fit's end compliance): a
-    chain hanging on its sag, whose quasi-static sag (soft) and torsional mode above the spans'
-    string modes (stiff) one span law does not hold (docs/reduced_models.md, "Level 1 on a
-    chain hanging on its sag")."""
-    _FELL_BACK.pop(("floor",) + key, None)
-    if slack3 is None or b > 0.0:
-        return
-    spans = _mean_links(drive) + (params["chain.link_stiffness"], (0.0, 0.0))
-    held = _split_slack(t_held, 0.0, c, spans, dt)
-    if held >= (1.0 - SHORTFALL) * slack3:
-        return
-    _FELL_BACK[("floor",) + key] = (
-        f"levels 0-1's slack span under load falls short of level 3's on this drive, which "
-        f"hangs on its sag (its spans hold {t_held:.4g} N at rest): under {m_b:.3g} N m level "
-        f"3's slack span carries {slack3:.3g} N, theirs {held:.3g} N, and no floor under their "
-        f"span law, at the end compliance that gives level 3's torsional mode, lifts it there "
-        f"(a static sag and a mode above the spans' string modes do not fit one span law; "
-        f"running, a 10A 19/38 drive with no pretension at 900 rpm: level 1 -59 %, level 2 "
-        f"-7 %). Take span tensions from level 2 or 3, or run level 1 on the seat ladder "
-        f"(torsional.wrap_statics = false: its spans keep their quasi-static sag, and its "
-        f"torsional mode is that of the ladder's seats)")
-
-
 def slack_shortfall(drive: Drive, params: Mapping[str, Any], level: int | None) -> str | None:
-    """Why levels 0-1's slack span under load falls short of level 3's (:func:`_note_shortfall`,
-    recorded when the fit ran), or None; level 2's strings sag by themselves and level 3 is the
-    reference. chainmodel.validity turns it into a warning (code ``slack_span_sag``)."""
+    """Why levels 0-1's slack span under load falls short of level 3's, or None; derived from
+    the (cached) :func:`wrap_fit` of a drive whose fit was honoured. It falls short where the
+    fit found no floor (softness 0: :func:`_softness` found none that reaches level 3's at the
+    fit's end compliance) and the law's slack span under the fit's load is more than
+    ``SHORTFALL`` below level 3's there: a chain hanging on its sag, whose quasi-static sag
+    (soft) and torsional mode above the spans' string modes (stiff) one span law does not hold
+    (docs/reduced_models.md, "Level 1 on a chain hanging on its sag"). Level 2's strings sag by
+    themselves and level 3 is the reference. chainmodel.validity turns it into a warning (code
+    ``slack_span_sag``)."""
     if level not in (0, 1):
         return None
-    return _FELL_BACK.get(("floor",) + parameters_key(drive, params))
+    fit = wrap_fit(drive, params)
+    if math.isnan(fit.loaded_slack) or fit.softness > 0.0:
+        return None
+    spans = _mean_links(drive) + (params["chain.link_stiffness"], (0.0, 0.0))
+    held = _split_slack(fit.held_tension, 0.0, fit.compliance, spans, fit.split_difference)
+    if held >= (1.0 - SHORTFALL) * fit.loaded_slack:
+        return None
+    m_b = fit.split_difference * drive.driven.pitch_radius
+    return (
+        f"levels 0-1's slack span under load falls short of level 3's on this drive, which "
+        f"hangs on its sag (its spans hold {fit.held_tension:.4g} N at rest): under {m_b:.3g} "
+        f"N m level 3's slack span carries {fit.loaded_slack:.3g} N, theirs {held:.3g} N, and "
+        f"no floor under their span law, at the end compliance that gives level 3's torsional "
+        f"mode, lifts it there (a static sag and a mode above the spans' string modes do not "
+        f"fit one span law; running, a 10A 19/38 drive with no pretension at 900 rpm: level 1 "
+        f"-59 %, level 2 -7 %). Take span tensions from level 2 or 3, or run level 1 on the "
+        f"seat ladder (torsional.wrap_statics = false: its spans keep their quasi-static sag, "
+        f"and its torsional mode is that of the ladder's seats)")
 
 
 def span_elastic_compliance(drive: Drive, params: Mapping[str, Any]) -> float:
