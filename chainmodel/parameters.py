@@ -248,7 +248,10 @@ PARAMETERS: tuple[Parameter, ...] = (
     # level 2
     _p("modal.modes", 1, "", "transverse Galerkin modes per span (seed 004 eq 57)",
        kind=int, minimum=1, maximum=20, levels=(2,)),
-    _p("modal.damping_ratio", 0.02, "", "modal damping ratio of the span modes", minimum=0.0,
+    _p("modal.damping_ratio", 0.02, "",
+       "modal damping ratio of the span modes (no source gives it: seed 004 Table 2's "
+       "mu_m = 0.02 is the coefficient of its non-dimensional eq 60, 0.02 / (m pi) of critical "
+       "at P_t = P; level 3's joint dampers damp xu2010's spans at about 0.26 %)", minimum=0.0,
        maximum=1.0, levels=(2,)),
     _p("modal.impulse_forcing", False, "",
        "add the impulse-train idealisation of the meshing impacts (seed 004 eqs 63-65)",
