@@ -43,6 +43,7 @@ from importlib import resources
 from typing import Any
 
 from .models import ALL_OUTPUTS, model_class
+from .models.limits import span_string_frequency
 from .parameters import FIDELITY_NAMES
 
 __all__ = ["AutoChoice", "choose", "scene_features", "table", "OUTPUT_FIGURES", "LEVEL3_ONLY",
@@ -98,7 +99,7 @@ def scene_features(scene, model=None) -> dict[str, float]:
     f_t, f_ax = model._frequencies
     t0 = max(float(model.static_tension()), 1e-9)
     rho = scene.parameters["chain.link_mass"] / d.pitch
-    f_span = math.sqrt(t0 / rho) / (2 * (d.span_pitches + d.pitch_fraction) * d.pitch)
+    f_span = span_string_frequency((d.span_pitches + d.pitch_fraction) * d.pitch, t0, 0.0, rho)
     load = abs(scene.operating.load_torque) / d.driven.pitch_radius
     return {"mesh_over_mode": f_mesh / min(f_t, f_ax), "mesh_over_span": f_mesh / f_span,
             "load_over_static": load / t0, "z1": float(d.n_driver), "z2": float(d.n_driven),

@@ -29,7 +29,7 @@ from ..geometry import Drive
 
 __all__ = ["STRAIN_LIMIT", "ANGLE_LIMIT", "QUASI_STATIC_RATIO", "RPM", "meshing_frequency",
            "chain_speed", "tension_limit", "centrifugal_speed_limit", "span_axial_frequency",
-           "speed_for_meshing"]
+           "speed_for_meshing", "span_string_frequency", "nearest_span_resonance"]
 
 #: largest span strain T / (k_link p) the models hold to
 STRAIN_LIMIT = 0.05
@@ -80,3 +80,38 @@ def span_axial_frequency(links: float, params: Mapping[str, Any], seat_complianc
     k_eff = 1.0 / (1.0 / k + seat_compliance / n)
     m = params["chain.link_mass"]
     return 2.0 * math.sqrt(k_eff / m) * math.sin(math.pi / (2.0 * n)) / (2.0 * math.pi)
+
+
+def span_string_frequency(length: float, tension: float, speed: float, rho: float) -> float:
+    """First transverse natural frequency [Hz] of a span: a string of ``length`` [m] and mass
+    ``rho`` [kg/m] moving at the chain speed ``speed`` [m/s] under the material tension
+    ``tension`` [N] (the reported span tension, centrifugal part rho v^2 included):
+    (1 / 2 l) sqrt((T - rho v^2) / rho), seed 004 eq 61 in dimensional form (its omega_1, the
+    Galerkin frequency without the gyroscopic term, which lowers it by a factor 1 - v^2 rho / T).
+    0 where the span carries no more than its centrifugal tension."""
+    elastic = tension - rho * speed * speed
+    return math.sqrt(elastic / rho) / (2.0 * length) if elastic > 0.0 else 0.0
+
+
+def nearest_span_resonance(meshing: float, first_modes: Mapping[str, float],
+                           harmonics: int = 2, modes: int = 3) -> tuple[str, int, int, float]:
+    """The meshing harmonic k f_m (k = 1..``harmonics``) nearest a span's string mode n f_1
+    (n = 1..``modes``, f_1 of each span in ``first_modes``, keyed by its name), as
+    (span, k, n, detuning) with detuning = k f_m / (n f_1) - 1; ("", 0, 0, nan) at rest or
+    without a span mode. Where it is small the polygonal action drives that mode at resonance
+    (k = 1, 2: the meshing's first two harmonics; seed 004 section 6 on tuning the span tension
+    away from them), and level 3's spans bow there, which lifts both spans' tension and which
+    levels 0-1, without span modes, do not follow (docs/reduced_models.md, "Level 1's running
+    slack span: the meshing on the slack span's string modes")."""
+    best = ("", 0, 0, math.nan)
+    if not meshing > 0.0:
+        return best
+    for span, f_1 in first_modes.items():
+        if not f_1 > 0.0:
+            continue
+        for k in range(1, harmonics + 1):
+            for n in range(1, modes + 1):
+                detuning = k * meshing / (n * f_1) - 1.0
+                if math.isnan(best[3]) or abs(detuning) < abs(best[3]):
+                    best = (span, k, n, detuning)
+    return best

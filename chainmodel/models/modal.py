@@ -41,6 +41,7 @@ import numpy as np
 from ..geometry import Drive
 from ..kernels import spans as S
 from .base import Inputs, SimulationDiverged
+from .limits import span_string_frequency
 from .span_sag import span_terms
 from .torsional import TorsionalModel
 from .wrap_statics import honoured, unavailable
@@ -143,7 +144,7 @@ class ModalModel(TorsionalModel):
         rho = self.params["chain.link_mass"] / self.drive.pitch
         lbar = self.reference["l_up" if span == "upper" else "l_low"]
         m = np.arange(1, self.n_modes + 1)
-        return m * math.pi / lbar * math.sqrt(max(tension - rho * speed * speed, 0.0) / rho)
+        return 2.0 * math.pi * m * span_string_frequency(lbar, tension, speed, rho)
 
     def _modal_initial(self, u: Inputs) -> np.ndarray:
         """Static sag under gravity at the static tension (linear), zero velocities."""
