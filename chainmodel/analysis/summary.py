@@ -6,7 +6,10 @@ import math
 
 import numpy as np
 
-__all__ = ["steady_window", "dominant_frequency", "tooth_ratio", "summarise"]
+from ..models.chain_inertia import reference_geometry
+from ..models.limits import chain_speed, nearest_span_resonance, span_string_frequency
+
+__all__ = ["steady_window", "dominant_frequency", "tooth_ratio", "span_modes", "summarise"]
 
 
 def steady_window(time: np.ndarray, ramp_time: float, duration: float) -> np.ndarray:
@@ -64,6 +67,26 @@ def tooth_ratio(driver_angle: np.ndarray, driven_angle: np.ndarray, n_driver: in
     return (phi2_end - float(driven_angle[0])) / (sign * k * period)
 
 
+def span_modes(drive, params, mean_speed: float, tight: float, slack: float) -> dict:
+    """The spans' first string modes at their mean tensions and the meshing harmonic nearest one
+    of their first three modes (:func:`chainmodel.models.limits.nearest_span_resonance`): the
+    summary's ``tight_span_mode_hz``, ``slack_span_mode_hz``, ``span_resonance`` (in words)
+    and ``span_resonance_detuning``. Both spans of a two-sprocket drive have the same mean
+    length (the two tangents), taken over a tooth period."""
+    ref = reference_geometry(drive)
+    length = 0.5 * (ref["l_up"] + ref["l_low"])
+    rho = params["chain.link_mass"] / drive.pitch
+    v = chain_speed(drive, mean_speed)
+    modes = {name: span_string_frequency(length, tension, v, rho)
+             for name, tension in (("tight", tight), ("slack", slack))}
+    mesh = abs(mean_speed) * drive.n_driver / (2 * math.pi)
+    span, k, n, detuning = nearest_span_resonance(mesh, modes)
+    words = (f"{'meshing' if k == 1 else f'{k} x meshing'} on the {span} span's mode {n}"
+             if span else "none (at rest, or no span in tension)")
+    return {"tight_span_mode_hz": modes["tight"], "slack_span_mode_hz": modes["slack"],
+            "span_resonance": words, "span_resonance_detuning": detuning}
+
+
 def summarise(result) -> dict:
     """Key figures of a :class:`chainmodel.simulation.Result` (SI units, snake_case keys)."""
     t = result.time
@@ -115,6 +138,8 @@ def summarise(result) -> dict:
         "dominant_frequency_hz": freq,
         "frequency_resolution_hz": df,
         "meshing_frequency_hz": mesh,
+        **span_modes(drive, scene.parameters, mean_speed, float(np.mean(tight)),
+                     float(np.mean(slack))),
         "wall_time_s": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else math.inf,
         # through the FMU: the part of the wall time before the first step (instantiation with

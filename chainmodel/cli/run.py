@@ -183,6 +183,11 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
         ("dominant freq.", f"{g(s['dominant_frequency_hz'])} Hz of the driven speed  (meshing "
                            f"{g(s['meshing_frequency_hz'])} Hz, resolution "
                            f"{g(s['frequency_resolution_hz'], 3)} Hz)"),
+        ("span modes", f"tight {g(s['tight_span_mode_hz'])} Hz, slack "
+                       f"{g(s['slack_span_mode_hz'])} Hz (first string modes at the mean "
+                       f"tensions); nearest: {s['span_resonance']}"
+                       + (f", {100 * s['span_resonance_detuning']:+.3g} %"
+                          if math.isfinite(s['span_resonance_detuning']) else "")),
         ("wall time", f"{s['wall_time_s']:.3g} s  (real-time factor {g(rtf, 3)}"
                       + (f"; {s['startup_time_s']:.2g} s of it instantiating and initializing "
                          "the FMU)" if s.get("startup_time_s") is not None else ")")),
