@@ -82,3 +82,13 @@ def test_level2_modal_frequencies_are_the_same_string():
     w = m.modal_frequencies(300.0, 5.0, "upper") / (2 * math.pi)
     f1 = math.sqrt((300.0 - rho * 25.0) / rho) / (2 * m.reference["l_up"])
     assert w == pytest.approx(f1 * np.arange(1, m.n_modes + 1), rel=1e-12)
+
+
+def test_a_drive_at_rest_has_no_span_resonance():
+    """At 0 rpm the meshing frequency is zero: the summary names no match (its mean speed is
+    round-off, 1e-16 rad/s, which must not read as a meshing harmonic 100 % below a mode), and
+    the spans still report their modes at the loaded tensions."""
+    s = chainmodel.simulate("xu2010", fidelity=1, input_speed_rpm=0.0, duration=0.1).summary()
+    assert s["span_resonance"].startswith("none")
+    assert math.isnan(s["span_resonance_detuning"])
+    assert s["slack_span_mode_hz"] > 0.0 and s["tight_span_mode_hz"] > s["slack_span_mode_hz"]

@@ -138,8 +138,9 @@ def summarise(result) -> dict:
         "dominant_frequency_hz": freq,
         "frequency_resolution_hz": df,
         "meshing_frequency_hz": mesh,
-        **span_modes(drive, scene.parameters, mean_speed, float(np.mean(tight)),
-                     float(np.mean(slack))),
+        # a scene set to rest has no meshing (its mean speed is round-off, not a frequency)
+        **span_modes(drive, scene.parameters, mean_speed if scene.operating.speed else 0.0,
+                     float(np.mean(tight)), float(np.mean(slack))),
         "wall_time_s": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else math.inf,
         # through the FMU: the part of the wall time before the first step (instantiation with
