@@ -87,7 +87,8 @@ def span_string_frequency(length: float, tension: float, speed: float, rho: floa
     ``rho`` [kg/m] moving at the chain speed ``speed`` [m/s] under the material tension
     ``tension`` [N] (the reported span tension, centrifugal part rho v^2 included):
     (1 / 2 l) sqrt((T - rho v^2) / rho), seed 004 eq 61 in dimensional form (its omega_1, the
-    Galerkin frequency without the gyroscopic term, which lowers it by a factor 1 - v^2 rho / T).
+    Galerkin frequency without the gyroscopic term; the exact moving string's is lower by a
+    factor sqrt(1 - rho v^2 / T): for xu2010's slack span 0.3 % at 120 rpm, 8 % at 600 rpm).
     0 where the span carries no more than its centrifugal tension."""
     elastic = tension - rho * speed * speed
     return math.sqrt(elastic / rho) / (2.0 * length) if elastic > 0.0 else 0.0
