@@ -3,8 +3,9 @@ nearest_span_resonance; chainmodel.analysis.summary.span_modes).
 
 Numbers from physics computed here: the first transverse mode of a taut string of length l and
 mass rho per metre under tension T is (1 / 2 l) sqrt(T / rho); a string moving at v under the
-material tension T carries rho v^2 of it as centrifugal tension (seed 004 eq 61 uses the rest);
-the two tangent spans of a two-sprocket drive are equally long.
+material tension T carries rho v^2 of it as centrifugal tension (seed 004 eq 61 uses the rest)
+and vibrates at (c^2 - v^2) / (2 l c), c^2 = T / rho (the travelling string, Wickert & Mote
+1990); the two tangent spans of a two-sprocket drive are equally long.
 """
 
 from __future__ import annotations
@@ -26,6 +27,11 @@ def test_a_string_at_rest_has_its_textbook_frequency_and_moving_loses_its_centri
     assert span_string_frequency(0.5, 400.0, 10.0, 0.95) == pytest.approx(math.sqrt(305 / 0.95))
     # nothing beyond the centrifugal tension: no transverse stiffness
     assert span_string_frequency(0.5, 95.0, 10.0, 0.95) == 0.0
+    # the travelling string's own frequency (c^2 - v^2) / (2 l c), c^2 = T / rho: lower by
+    # sqrt(1 - rho v^2 / T)
+    c = math.sqrt(400 / 0.95)
+    assert span_string_frequency(0.5, 400.0, 10.0, 0.95, moving=True) == pytest.approx(
+        (c * c - 100.0) / (2 * 0.5 * c))
 
 
 def test_the_nearest_resonance_is_the_smallest_detuning_over_harmonics_modes_and_spans():
@@ -49,7 +55,7 @@ def test_the_summary_reports_the_slack_span_on_xu2010s_meshing(rpm, k, detuning_
     """xu2010 under its 43.2 N m at level 1: the summary's span modes are the string formula at
     the run's own mean span tensions (computed here from the outputs, the span length from the
     tooth-period geometry), and the nearest match is the slack span's first mode, at k times
-    the meshing (docs/reduced_models.md's table: +10.3 % and +11.2 % at level 1's tension)."""
+    the meshing (docs/reduced_models.md: +10.4 % and +11.3 % at level 1's tension)."""
     r = chainmodel.simulate("xu2010", fidelity=1, input_speed_rpm=rpm, duration=0.6,
                             output_interval=2e-4)
     s = r.summary()
@@ -64,7 +70,8 @@ def test_the_summary_reports_the_slack_span_on_xu2010s_meshing(rpm, k, detuning_
     for key, output in (("slack_span_mode_hz", "slack_span.tension"),
                         ("tight_span_mode_hz", "tight_span.tension")):
         tension = float(np.mean(r[output][mask]))
-        expected = math.sqrt((tension - rho * v * v) / rho) / (2 * length)
+        c = math.sqrt(tension / rho)              # the travelling string: (c^2 - v^2) / (2 l c)
+        expected = (c * c - v * v) / (2 * length * c)
         assert s[key] == pytest.approx(expected, rel=1e-3), key
     words = "meshing" if k == 1 else f"{k} x meshing"
     assert s["span_resonance"] == f"{words} on the slack span's mode 1"

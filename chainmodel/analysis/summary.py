@@ -77,7 +77,7 @@ def span_modes(drive, params, mean_speed: float, tight: float, slack: float) -> 
     length = 0.5 * (ref["l_up"] + ref["l_low"])
     rho = params["chain.link_mass"] / drive.pitch
     v = chain_speed(drive, mean_speed)
-    modes = {name: span_string_frequency(length, tension, v, rho)
+    modes = {name: span_string_frequency(length, tension, v, rho, moving=True)
              for name, tension in (("tight", tight), ("slack", slack))}
     mesh = abs(mean_speed) * drive.n_driver / (2 * math.pi)
     span, k, n, detuning = nearest_span_resonance(mesh, modes)

@@ -82,16 +82,23 @@ def span_axial_frequency(links: float, params: Mapping[str, Any], seat_complianc
     return 2.0 * math.sqrt(k_eff / m) * math.sin(math.pi / (2.0 * n)) / (2.0 * math.pi)
 
 
-def span_string_frequency(length: float, tension: float, speed: float, rho: float) -> float:
+def span_string_frequency(length: float, tension: float, speed: float, rho: float,
+                          moving: bool = False) -> float:
     """First transverse natural frequency [Hz] of a span: a string of ``length`` [m] and mass
     ``rho`` [kg/m] moving at the chain speed ``speed`` [m/s] under the material tension
     ``tension`` [N] (the reported span tension, centrifugal part rho v^2 included):
     (1 / 2 l) sqrt((T - rho v^2) / rho), seed 004 eq 61 in dimensional form (its omega_1, the
-    Galerkin frequency without the gyroscopic term; the exact moving string's is lower by a
-    factor sqrt(1 - rho v^2 / T): for xu2010's slack span 0.3 % at 120 rpm, 8 % at 600 rpm).
-    0 where the span carries no more than its centrifugal tension."""
+    Galerkin frequency without the gyroscopic term). With ``moving``, the axially moving
+    string's own, lower by the gyroscopic factor sqrt(1 - rho v^2 / T): (c^2 - v^2) / (2 l c),
+    c^2 = T / rho (the travelling string's exact modes; Wickert & Mote, "Classical vibration
+    analysis of axially moving continua", J. Appl. Mech. 57 (1990) 738-744); for xu2010's
+    slack span 0.4 % lower at 120 rpm, 8 % at 600 rpm. 0 where the span carries no more than
+    its centrifugal tension."""
     elastic = tension - rho * speed * speed
-    return math.sqrt(elastic / rho) / (2.0 * length) if elastic > 0.0 else 0.0
+    if not elastic > 0.0:
+        return 0.0
+    f = math.sqrt(elastic / rho) / (2.0 * length)
+    return f * math.sqrt(elastic / tension) if moving else f
 
 
 def nearest_span_resonance(meshing: float, first_modes: Mapping[str, float],
