@@ -679,7 +679,7 @@ def _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
     and c[C_SEG_*], and the points up to j take the step's dense output. Returns (kept, the
     evaluations made); ``aux`` is left stale either way."""
     n = times.size
-    if cfg[CF_STEP] > 0.0 or i + 1 >= n or i <= c[C_SEG_BLOCK] or P[P_MODES] > 0.0:
+    if cfg[CF_STEP] > 0.0 or i + 1 >= n or i <= c[C_SEG_BLOCK]:
         return False, 0
     t0 = times[i - 1]
     w = omega_estimate(aux, G, P, Q)
@@ -746,12 +746,12 @@ def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_c
     c, W, V, aux, flags = S
     steps = 0
     made = 0
-    if (c[C_SEG_END] < i and flags[0] != 0.0 and i + 1 < times.size
+    if (c[C_SEG_END] < i and flags[0] != 0.0 and i + 1 < times.size and P[P_MODES] == 0.0
             and (times[i + 1] - times[i - 1]) * Q[Q_W_SPROCKET] <= cfg[CF_THETA]):
-        # the evaluation at point i-1 (aux, W[3], V[0]) is at its own inputs, and the
-        # tolerance's step on the sprockets' bound spans two intervals (the cheap test that
-        # keeps a drive whose bound is below them from paying for the call): try a step
-        # spanning several points from there
+        # level 1 (level 2: module docstring), the evaluation at point i-1 (aux, W[3], V[0])
+        # at its own inputs, and the tolerance's step on the sprockets' bound spanning two
+        # intervals (the cheap test that keeps a drive whose bound is below them from paying
+        # for the call): try a step spanning several points from there
         kept, made = _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
         if kept:
             steps = 1
