@@ -768,17 +768,7 @@ def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_c
         return _check(x, P, Q), steps, 0, made, times[i], 0.0
     t0 = times[i - 1]
     t1 = times[i]
-    c[C_T0] = t0
-    c[C_DT] = t1 - t0
-    c[C_A0] = angle[i - 1]
-    c[C_W0] = speed[i - 1]
-    c[C_A1] = angle[i]
-    c[C_W1] = speed[i]
-    c[C_ACC0] = acc[i - 1]
-    c[C_ACC1] = acc[i]
-    c[C_L0] = load[i - 1]
-    c[C_L1] = load[i]
-    c[C_IN_T] = math.nan        # a new interpolant: nothing evaluated on it yet
+    _set_interval(c, times, angle, speed, acc, load, i - 1, i)
     started = flags[0] != 0.0
     if started:
         # the evaluation that ended the last step was made at this point's own inputs;
