@@ -144,8 +144,9 @@ BATCH_POINTS = 4096
 def _run_batched(scene, model, stepper, times, data, bar) -> bool:
     """Every communication point through the stepper's compiled many-point path (one call per
     BATCH_POINTS points, the inputs sampled beforehand, the outputs computed inside): the
-    numbers of the per-point loop without its Python round trip per point. False (nothing
-    done) when the stepper and model have no such path."""
+    numbers of the per-point loop without its Python round trip per point, except where level
+    1's steps span several points (docs/numerics.md, "Steps spanning output points"). False
+    (nothing done) when the stepper and model have no such path."""
     inputs = scene.input_arrays(times)
     out = np.empty((min(BATCH_POINTS, len(times) - 1) + 1, len(ALL_OUTPUTS)))
     names = [o.name for o in ALL_OUTPUTS]
@@ -174,7 +175,10 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     ``batched``: where the stepper and model offer it (levels 1-3 with their compiled loops),
     run many communication points in one compiled call, outputs included - the same numbers as
     the per-point loop (``batched=False``, one ``Stepper.advance`` per point as the FMU steps),
-    without its Python overhead per point.
+    without its Python overhead per point. At level 1, where the step bound spans two or more
+    output intervals, the batched call takes one step over several points and fills them from
+    its dense output: faster, and within the tolerance of the per-point loop, not equal to it
+    (docs/numerics.md, "Steps spanning output points").
 
     ``model``: the scene's model when the caller has built it already (simulate() with
     fidelity="auto": the choice built it to check the level); else it is built here.
