@@ -51,8 +51,9 @@ order (w h)^4 / 384 of the mode's amplitude, below the tolerance's phase error) 
 evaluated at their own inputs. On C1 at 400 rpm (h_max 2.85 ms, outputs every 0.1 ms) this
 cuts level 1's evaluations per point from 4.6 to 2.6, the outputs within 1-2 % of their
 ripple of the steps point by point (docs/numerics.md). Level 2 keeps the steps point by
-point: its string modes under impulsive endpoint motion need steps well below the bound
-(docs/numerics.md, "Level 2 at the bound"). The held step (the FMU) has one interval: unchanged.
+point: near a span's parametric resonance its time series depends on the step as on any tiny
+change of the problem (docs/numerics.md, "Level 2 on C1 at 400 rpm"), and the steps point by
+point keep its runs what they were. The held step (the FMU) has one interval: unchanged.
 
 **Outputs** at each communication point come from the point's own inputs: the evaluation that
 ends the last step is reused when its inputs are those (held inputs), otherwise the kernel is
