@@ -683,7 +683,7 @@ def _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
     if cfg[CF_STEP] > 0.0 or i + 1 >= n or i <= c[C_SEG_BLOCK]:
         return False, 0
     t0 = times[i - 1]
-    w = omega_estimate(aux, G, P, Q)
+    w = _omega_at(t0, x, aux, c, G, P, Q)
     top = max(abs(speed[i - 1]), abs(speed[i]))
     j = i
     while j + 1 < n:
@@ -706,10 +706,9 @@ def _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
         h = times[j] - t0
         made += _step_from(t0, x, h, c, G, P, k1, W[4], W[5], W[6], W[7], aux, xn) + 1
         _switch(times[j], xn, c, G, P, f1, aux, V[1])
-        top = max(abs(c[C_W0]), abs(c[C_W1]))
-        h_event = Q[Q_EVENT_ANGLE] / top if top > 0.0 else math.inf
         if (_after_step(times[j], xn, c, P, Q) != STATUS_OK
-                or h > _step_bound(omega_estimate(aux, G, P, Q), h_event, cfg)):
+                or h > _step_bound(_omega_at(times[j], xn, aux, c, G, P, Q),
+                                   _event_step(c, Q), cfg)):
             c[C_SEG_BLOCK] = j
             return False, made
         if not _changed(V[1], V[0]):
