@@ -8,6 +8,9 @@ ladder (item 3, as far as it holds).
   springs k_c and links k_link: K = k_c + k_link K / (k_link + K)), and the input shaft's spring;
 * energy bounded with every dissipation off on C1 (16B values; xu2010 has its own test in
   tests/test_multibody.py).
+* level 3's running spans: the rise of both spans' tension on the 16B mixer from 20 to 200 rpm
+  against their excess length over the chords, from the rollers' positions, times the spans'
+  stiffness in series (geometric compatibility).
 
 Measured per level with docs/scripts/ringdown.py (table in docs/reduced_models.md).
 """
@@ -105,3 +108,65 @@ def test_c1_energy_bounded_without_dissipation():
     # bounded, not growing: the last third no worse than twice the first third's worst
     k = len(errors) // 3
     assert np.max(errors[-k:]) <= 2 * np.max(errors[:k]) + 1e-3 * worst_work
+
+
+def _span_shapes(result, centres):
+    """Per snapshot of a level-3 run: the excess length of each free span over its chord [m]
+    (the polyline of the rollers between the last seated ones minus the chord), summed over
+    both spans, computed here from the rollers' positions."""
+    out = []
+    for _, snap in result.snapshots:
+        engaged = snap["engaged_driver"] | snap["engaged_driven"]
+        m = engaged.size
+        start = int(np.argmax(engaged))
+        order = [(start + j) % m for j in range(m)]
+        total, spans, j = 0.0, 0, 0
+        while j < m:
+            if engaged[order[j]]:
+                j += 1
+                continue
+            a = j
+            while j < m and not engaged[order[j]]:
+                j += 1
+            z = snap["roller_positions"][[order[a - 1]] + order[a:j] + [order[j % m]]]
+            total += float(np.sum(np.hypot(*np.diff(z, axis=0).T)) - np.hypot(*(z[-1] - z[0])))
+            spans += 1
+        if spans == 2:
+            out.append(total)
+    return np.array(out)
+
+
+def test_level3_running_span_rise_is_its_spans_bowing():
+    """Geometric compatibility of level 3's running spans (docs/reduced_models.md, "The 16B
+    mixer"): from 20 to 200 rpm both of the 16B mixer's spans rise by the same amount, and
+    that rise is the spans' excess length over their chords (from the rollers' positions)
+    times the two spans' stiffness in series (each span's links in series with the seat ladder
+    at both ends, the module docstring's K_seat, from the chain's values), within 20 %. The
+    rollers on the sprockets stay where they were (no riding up the teeth)."""
+    path = "examples/scenes/16b_mixer.toml"
+    sc = load_scene(path, fidelity=3)
+    p, r = sc.parameters, sc.with_overrides(fidelity=1).model().reference
+    kl, kc = p["chain.link_stiffness"], p["contact.stiffness"]
+    k_seat = 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
+    k_up, k_low = (1.0 / (r["n_" + s] / kl + 2.0 / k_seat) for s in ("up", "low"))
+    series = k_up * k_low / (k_up + k_low)
+    centres = sc.model()._centres
+    runs = {}
+    for rpm in (20.0, 200.0):
+        run = sc.with_overrides(input_speed_rpm=rpm, duration=1.0, output_interval=2e-4)
+        res = chainmodel.simulation.run_scene(run, snapshot_every=5)
+        keep = [(t, s) for t, s in res.snapshots if t >= 0.5]
+        res.snapshots[:] = keep
+        w = res.time >= 0.5
+        seated = [np.mean(np.hypot(*(snap["roller_positions"][snap[key]] - c).T)) - radius
+                  for _, snap in keep
+                  for key, c, radius in (("engaged_driver", centres[0], sc.drive.driver.pitch_radius),
+                                         ("engaged_driven", centres[1], sc.drive.driven.pitch_radius))]
+        runs[rpm] = (_span_shapes(res, centres).mean(), res["tight_span.tension"][w].mean(),
+                     res["slack_span.tension"][w].mean(), float(np.mean(seated)))
+    d_len = runs[200.0][0] - runs[20.0][0]
+    d_tight, d_slack = (runs[200.0][k] - runs[20.0][k] for k in (1, 2))
+    assert d_slack > 100.0, "the mixer's slack span no longer rises: the test checks nothing"
+    assert abs(d_tight - d_slack) < 0.05 * d_slack
+    assert abs(series * d_len - d_slack) < 0.2 * d_slack, (series * d_len, d_slack)
+    assert abs(runs[200.0][3] - runs[20.0][3]) < 1e-5      # 10 um: the seated rollers stay

@@ -25,8 +25,10 @@ longer than its chord, which lifts both spans' tension. Per scene this prints:
         # the estimate with level 3's span damping, at level 3's slack tension, 12 modes
     python docs/scripts/span_bowing.py --campbell docs/figures/span_campbell_xu2010.png
         # the figure: xu2010's slack span at levels 1-3 over 5-150 rpm above its Campbell
-        # diagram (the slack span's modes at level 3's tension, the meshing harmonics);
-        # about 30 s
+        # diagram (the spans' modes at level 3's tensions, the meshing harmonics); about 30 s
+    python docs/scripts/span_bowing.py --campbell docs/figures/span_campbell_16b_mixer.png \
+        --scene examples/scenes/16b_mixer.toml --speeds 20:330:10
+        # the same for the 16B mixer example over 20-320 rpm; about 20 s
 
 The estimate is linear: it leaves out the tension its own stretch adds, which tunes a string
 towards a meshing harmonic above it (the hardening that makes level 3's rise at 60 rpm), and
@@ -148,7 +150,10 @@ def row(label, scene, slack3=None, rise3=None, modes=MODES, zeta=None, at_level3
 def main(argv):
     start = time.perf_counter()
     if "--campbell" in argv:
-        campbell(_option(argv, "--campbell", None))
+        speeds = _option(argv, "--speeds", None)
+        campbell(_option(argv, "--campbell", None), _option(argv, "--scene", "xu2010"),
+                 tuple(range(5, 155, 5)) if speeds is None
+                 else tuple(range(*(int(v) for v in speeds.split(":")))))
         print(f"wall {time.perf_counter() - start:.0f} s")
         return
     zeta = _option(argv, "--zeta", None)
@@ -179,41 +184,60 @@ def main(argv):
           f"{3 if opts['at_level3'] else 1}'s slack tension; wall {time.perf_counter() - start:.0f} s")
 
 
-def campbell(path: str, speeds=tuple(range(5, 155, 5))) -> None:
-    """Two panels over xu2010's input speed: the mean slack-span tension of levels 1, 2 and 3
-    (0.6 s runs, second half), and below it the slack span's first three string modes at level
-    3's running tension with the meshing frequency and twice it (a Campbell diagram): where a
-    ray crosses a mode, level 3's slack span rises and level 1's does not."""
+def campbell(path: str, scene_name: str = "xu2010", speeds=tuple(range(5, 155, 5))) -> None:
+    """Two panels over a scene's input speed: the mean slack-span tension of levels 1, 2 and 3
+    (0.6 s runs, second half), and below it a Campbell diagram, the slack span's first three
+    string modes and the tight span's first two at level 3's running tensions with the meshing
+    frequency and twice it: where a ray crosses a mode, level 3's spans rise and level 1's do
+    not."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    base = load_scene("xu2010")
+    base = load_scene(scene_name)
     modal = base.with_overrides(fidelity=2).model()
     d = modal.drive
     slack = {level: [] for level in (1, 2, 3)}
+    tight3 = []
     for k, rpm in enumerate(speeds):
         sc = base.with_overrides(input_speed_rpm=float(rpm), duration=0.6)
         for level in slack:
-            slack[level].append(running(sc, level)[1])
+            tight, s = running(sc, level)
+            slack[level].append(s)
+            if level == 3:
+                tight3.append(tight)
         print(f"\r{k + 1}/{len(speeds)} speeds", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
     rpm = np.asarray(speeds, float)
-    f_1 = np.array([float(modal.modal_frequencies(t, d.n_driver * d.pitch * n / 60.0)[0])
-                    / (2.0 * math.pi) for t, n in zip(slack[3], rpm)])
+    lower = lower_tight(base.operating.load_torque, base.parameters["driven.damping"],
+                        modal.mass_matrix()[1, 1], d.tooth_ratio, base.operating.speed, 0.0)
+    spans = ("upper", "lower") if lower else ("lower", "upper")      # (slack, tight)
+
+    def first_mode(tensions, span):
+        return np.array([float(modal.modal_frequencies(t, d.n_driver * d.pitch * n / 60.0,
+                                                       span)[0]) / (2.0 * math.pi)
+                         for t, n in zip(tensions, rpm)])
+
+    f_slack, f_tight = first_mode(slack[3], spans[0]), first_mode(tight3, spans[1])
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6.5))
     for level, style in ((3, "k-o"), (2, "C0-s"), (1, "C3-^")):
         top.plot(rpm, slack[level], style, ms=3, label=f"level {level}")
     top.set_ylabel("mean slack-span tension [N]")
     top.legend(loc="upper left")
-    top.set_title("xu2010, 43.2 N m: the slack span against the meshing's harmonics")
+    top.set_title(f"{base.name}, {base.operating.load_torque:g} N m: the spans against the "
+                  "meshing's harmonics", fontsize=10)
     for n in (1, 2, 3):
-        bottom.plot(rpm, n * f_1, "k-", lw=1.2)
-        bottom.annotate(f"slack mode {n}", (rpm[-1], n * f_1[-1]), fontsize=8,
+        bottom.plot(rpm, n * f_slack, "k-", lw=1.2)
+        bottom.annotate(f"slack mode {n}", (rpm[-1], n * f_slack[-1]), fontsize=8,
                         xytext=(-60, 4), textcoords="offset points")
+    for n in (1, 2):
+        bottom.plot(rpm, n * f_tight, "-", color="0.55", lw=1.0)
+        mid = rpm.size // 2
+        bottom.annotate(f"tight mode {n}", (rpm[mid], n * f_tight[mid]), fontsize=8,
+                        color="0.4", xytext=(2, 4), textcoords="offset points")
     f_m = d.n_driver * rpm / 60.0
     bottom.plot(rpm, f_m, "C1--", label="meshing f_m")
     bottom.plot(rpm, 2 * f_m, "C2--", label="2 f_m")
-    bottom.set_ylim(0, 4 * float(np.max(f_1)))
+    bottom.set_ylim(0, 4 * float(np.max(f_slack)))
     bottom.set_xlabel("input speed [rpm]")
     bottom.set_ylabel("frequency [Hz]")
     bottom.legend(loc="upper left")
