@@ -83,8 +83,11 @@ def _log_features(r):
 def _rule(rows, features, figures, target, accepted_levels):
     """The selection rule of docs/tradeoff.md computed directly on the table rows: among the
     scenes with a valid reference inside validity, the neighbours within distance 1 (or the
-    nearest); per configuration the worst error over them; the cheapest meeting the target,
-    else the most accurate. Returns (config, its error, met)."""
+    nearest); per configuration the worst error over them, over their bands and against their
+    nominal references; a configuration meets the target only if measured on every neighbour;
+    the cheapest meeting it, else the most accurate (those measured everywhere first). Returns
+    (config, its error, met, promised): promised when met and at least half of the error is
+    the level's own (against the nominal reference)."""
     sources = {}
     for r in rows:
         if r["status"] == "ok" and not r["reference_problems"]:
@@ -93,18 +96,22 @@ def _rule(rows, features, figures, target, accepted_levels):
     dist = {n: math.dist(here, _log_features(rs[0])) for n, rs in sources.items()}
     nearest = min(dist, key=dist.get)
     near = [n for n in dist if dist[n] <= 1.0] or [nearest]
-    worst = {}
+    worst, nominal, seen = {}, {}, {}
     for n in near:
         for r in sources[n]:
-            e = max(r[f"err_{f}"] for f in figures)
-            worst[r["config"]] = max(worst.get(r["config"], 0.0), e)
+            c = r["config"]
+            worst[c] = max(worst.get(c, 0.0), max(r[f"err_{f}"] for f in figures))
+            nominal[c] = max(nominal.get(c, 0.0), max(r[f"errnom_{f}"] for f in figures))
+            seen[c] = seen.get(c, 0) + 1
     cands = [r for r in sources[nearest] if r["level"] in accepted_levels]
-    ok = [r for r in cands if worst[r["config"]] <= target]
+    ok = [r for r in cands if worst[r["config"]] <= target and seen[r["config"]] == len(near)]
     if ok:
         best = min(ok, key=lambda r: r["wall_per_sim_s"])
-        return best["config"], worst[best["config"]], True
-    best = min(cands, key=lambda r: (worst[r["config"]], r["wall_per_sim_s"]))
-    return best["config"], worst[best["config"]], False
+        c = best["config"]
+        return c, worst[c], True, nominal[c] >= 0.5 * worst[c]
+    best = min(cands, key=lambda r: (seen[r["config"]] < len(near), worst[r["config"]],
+                                     r["wall_per_sim_s"]))
+    return best["config"], worst[best["config"]], False, False
 
 
 @pytest.mark.parametrize("target", [0.05, 0.20, 0.50])
@@ -116,11 +123,11 @@ def test_auto_low_speed_driven_speed_ripple_follows_the_rule_written_in_the_test
     scene = load_scene("xu2010", input_speed_rpm=30)
     choice = auto.choose(scene, ["driven_speed_ripple"], target)
     assert choice.source_scene == "xu2010 30 rpm" and not choice.extrapolated
-    config, err, met = _rule(auto.table(), auto.scene_features(scene),
-                             ["driven_speed_ripple"], target, (0, 1, 2, 3))
+    config, err, met, promised = _rule(auto.table(), auto.scene_features(scene),
+                                       ["driven_speed_ripple"], target, (0, 1, 2, 3))
     assert choice.config == config and choice.met == met
     assert choice.expected_error == pytest.approx(err)
-    assert choice.promised == met
+    assert choice.promised == promised
     if not met:
         assert "cannot promise" in choice.message and f"meets {100 * target:g} %" in choice.message
 
@@ -157,11 +164,15 @@ _EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 
 
 @pytest.mark.parametrize("scene_kw, outputs, accuracy", [
-    # xu2010 at 60 rpm: between the measured 30 and 120 rpm
-    (("xu2010", dict(input_speed_rpm=60, duration=0.6)), ["tight_span.tension"], 0.2),
+    # xu2010 at 90 rpm and a quarter of its load: between the measured 30 and 120 rpm
+    (("xu2010", dict(input_speed_rpm=90, load_torque=10.0, duration=0.64)), ["driven.speed"],
+     0.2),
     # a 12B chain (19.05 mm): a chain size the table does not hold, at 150 rpm
     ((str(_EXAMPLES / "12b_conveyor.toml"), dict(input_speed_rpm=150, duration=0.6)),
      ["tight_span.tension"], 0.3),
+    # the 08B fan at 300 rpm, half the slowest speed measured on it
+    ((str(_EXAMPLES / "08b_fan_1500rpm.toml"), dict(input_speed_rpm=300, duration=0.3)),
+     ["slack_span.tension"], 0.2),
 ])
 def test_auto_promise_holds_within_2x_on_drives_not_in_the_table(scene_kw, outputs, accuracy):
     """fidelity='auto' promises an error on a drive outside its table; here the chosen
@@ -177,6 +188,48 @@ def test_auto_promise_holds_within_2x_on_drives_not_in_the_table(scene_kw, outpu
     figures = [f for o in outputs for f in auto.OUTPUT_FIGURES[o]]
     measured = _band_worst(chosen, _level3_band(sc), figures)
     assert measured <= 2.0 * choice.expected_error, (measured, choice.message)
+
+
+def test_auto_declines_to_promise_an_error_that_is_mostly_the_reference_band():
+    """Level 3 at its own step has almost no error against the nominal reference; its table
+    error is the neighbour's uncertainty band, which does not carry over: on this unseen
+    10B 11/33 drive the band (measured here) is many times the neighbour's, and auto says it
+    cannot promise. Before the rule it promised 1.8 % and the measured worst case was 26-30 %
+    (docs/tradeoff.md, "Auditing the promise")."""
+    path = Path(__file__).resolve().parents[1] / "docs/scripts/unseen_drives/10b_11_33.toml"
+    sc = load_scene(str(path), input_speed_rpm=300, duration=0.3)
+    choice = auto.choose(sc, ["tight_span.tension"], 0.1)
+    assert choice.level == 3 and choice.met and not choice.promised
+    assert "uncertainty band" in choice.why_not and "cannot promise" in choice.message
+    assert choice.nominal_error < 0.5 * choice.expected_error
+    figures = auto.OUTPUT_FIGURES["tight_span.tension"]
+    runs = _level3_band(sc)
+    here = max((max(r[f] for r in runs) - min(r[f] for r in runs)) / 2 / abs(runs[0][f])
+               for f in figures)
+    rows = [r for r in auto.table() if r["scene"] in choice.neighbours]
+    there = max(r[f"band_{f}"] for r in rows for f in figures)
+    assert here > 3.0 * there, (here, there)
+
+
+@pytest.mark.parametrize("preset, rpm", [
+    (str(_EXAMPLES / "16b_mixer.toml"), 300.0),       # level 0 refused on 2 of 4 neighbours
+    ("xu2010", 60.0),
+    (str(Path(__file__).resolve().parents[1] / "docs/scripts/unseen_drives/10b_11_33.toml"),
+     300.0),
+])
+@pytest.mark.parametrize("output", ["tight_span.tension", "slack_span.tension", "driven.speed"])
+def test_auto_choice_and_promise_follow_the_rule_written_in_the_test(preset, rpm, output):
+    """On drives outside the table, for every output: the configuration, its error, whether
+    the target is met and whether it is promised are those of the rule written in the test
+    (coverage of every neighbour, the model-error share)."""
+    sc = load_scene(preset, input_speed_rpm=rpm)
+    for target in (0.1, 0.5):
+        choice = auto.choose(sc, [output], target)
+        assert not choice.extrapolated          # all three lie within distance 1 of the table
+        config, err, met, promised = _rule(auto.table(), auto.scene_features(sc),
+                                           auto.OUTPUT_FIGURES[output], target, (0, 1, 2, 3))
+        assert (choice.config, choice.met, choice.promised) == (config, met, promised)
+        assert choice.expected_error == pytest.approx(err)
 
 
 def test_auto_declines_to_promise_far_from_the_table_and_says_why():
@@ -351,6 +404,8 @@ def test_cli_fidelity_auto(capsys):
     data = json.loads(cap.out)
     assert data["fidelity_level"] == 3 and data["fidelity_auto"]["source_scene"]
     assert data["fidelity_auto"]["promised"] == (data["fidelity_auto"]["why_not"] == "")
+    # against the nominal reference alone the error is never above the worst case over the band
+    assert 0.0 <= data["fidelity_auto"]["nominal_error"] <= data["fidelity_auto"]["expected_error"]
     assert "fidelity auto" in cap.err
     assert main(["run", "xu2010", "--fidelity", "1", "--accuracy", "0.1"]) == 2
     assert "--fidelity auto" in capsys.readouterr().err

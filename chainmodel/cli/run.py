@@ -128,6 +128,7 @@ def cmd_run(args) -> int:
     out["assumed"] = scene.assumed_lines()    # values not given, with their sources
     if choice is not None:
         out["fidelity_auto"] = {"config": choice.config, "expected_error": choice.expected_error,
+                                "nominal_error": choice.nominal_error,
                                 "figures": list(choice.figures), "met": choice.met,
                                 "source_scene": choice.source_scene,
                                 "extrapolated": choice.extrapolated, "message": choice.message,
