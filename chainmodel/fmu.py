@@ -18,7 +18,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["simulate_fmu", "FMUSession", "FMUError", "reference_scene", "variables_table", "update_doc_table"]
+__all__ = ["simulate_fmu", "FMUSession", "FMUError", "reference_scene", "variables_table",
+           "update_doc_table", "differing_files"]
+
+#: where build_fmu.py puts its copy of this package inside the FMU
+_VENDORED = "resources/_vendor/chainmodel/"
 
 
 class FMUError(RuntimeError):
@@ -68,6 +72,29 @@ class _Log:
 
 
 _EXTRACTED: dict[tuple, str] = {}
+
+
+def differing_files(fmu_path: str | Path) -> list[str]:
+    """The files of this package (``chainmodel/...``) whose content differs between the FMU's
+    embedded copy and the package installed here, or that only one of them has (compiled
+    caches left out, as build_fmu.py leaves them out): empty when the FMU was built from this
+    very chainmodel. A different list means the FMU's results are another version's."""
+    import hashlib
+    import zipfile
+    here = Path(__file__).resolve().parent
+    skip = ("__pycache__", ".pyc", ".pyo")
+
+    def digest(data: bytes) -> str:
+        return hashlib.sha256(data).hexdigest()
+
+    ours = {p.relative_to(here).as_posix(): digest(p.read_bytes()) for p in here.rglob("*")
+            if p.is_file() and not any(k in p.as_posix() for k in skip)}
+    with zipfile.ZipFile(fmu_path) as z:
+        theirs = {n[len(_VENDORED):]: digest(z.read(n)) for n in z.namelist()
+                  if n.startswith(_VENDORED) and not n.endswith("/")
+                  and not any(k in n for k in skip)}
+    return sorted("chainmodel/" + k for k in set(ours) | set(theirs)
+                  if ours.get(k) != theirs.get(k))
 
 
 def _extracted(fmu_path: Path) -> str:

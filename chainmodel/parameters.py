@@ -116,6 +116,15 @@ def _p(*args, **kw) -> Parameter:
 _ROLLER_RADIUS = 10.16e-3 / 2
 _SEAT_RADIUS = round(0.505 * 10.16e-3, 12)  # ISO 606 minimum seating-curve radius r_i,min = 0.505 d1
 _JOINT_CLEARANCE = round(5.13e-3 - 5.08e-3, 12)  # ISO 606 10B: bush bore d3 min - pin body d2 max
+# Plausibility bounds, far beyond any chain drive, so that a typo (grams as kilograms, a
+# missing minus in an exponent) is refused with the range instead of overflowing the arithmetic
+# or running for hours: link and contact stiffness 1e11 N/m (1000x the 16B link's 1.06e8 of
+# chainmodel.chains; level 3's stable step would fall to ~1e-9 s), shaft stiffness 1e10 N.m/rad,
+# inertias 1e6 kg.m2 (a 10 m steel disc 1 m wide is 1.5e6), centre distance 1 km
+_STIFFNESS_MAX = 1e11
+_SHAFT_STIFFNESS_MAX = 1e10
+_INERTIA_MAX = 1e6
+_CENTRE_DISTANCE_MAX = 1e3
 
 PARAMETERS: tuple[Parameter, ...] = (
     _p("fidelity", 1, "", "model level: 0 kinematic, 1 torsional, 2 modal, 3 multibody "
@@ -131,7 +140,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("drive.links", 46, "", "links in the closed chain, M", kind=int, minimum=4, maximum=100000),
     _p("drive.centre_distance", 0.1977, "m",
        "shaft centre distance; 0 selects the distance at which the chain wraps tightly "
-       "(seed 004 section 2)", minimum=0.0, display_unit="mm"),
+       "(seed 004 section 2)", minimum=0.0, maximum=_CENTRE_DISTANCE_MAX, display_unit="mm"),
     _p("drive.inclination", 0.0, "rad",
        "angle of the line of centres (driven to driver) above the horizontal; sets the "
        "direction of gravity", minimum=-math.pi, maximum=math.pi, display_unit="deg"),
@@ -139,7 +148,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     _p("chain.link_mass", 0.0162, "kg", "mass of one link including one roller (seed 003)",
        minimum=0.0, exclusive_minimum=True),
     _p("chain.link_stiffness", 5.1e7, "N/m", "longitudinal stiffness of one link (seed 003)",
-       minimum=0.0, exclusive_minimum=True),
+       minimum=0.0, exclusive_minimum=True, maximum=_STIFFNESS_MAX),
     _p("chain.link_damping", 100.0, "N.s/m", "damping of one link (seed 003)", minimum=0.0),
     _p("chain.joint_damping", 0.002, "N.m.s/rad",
        "viscous damping of the relative rotation of neighbouring links at a joint (not in seed "
@@ -172,7 +181,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        "R_t - R_r is the roller-seat clearance", minimum=0.0, exclusive_minimum=True,
        display_unit="mm", levels=(3,)),
     _p("contact.stiffness", 8.46e6, "N/m", "equivalent roller-tooth contact stiffness (seed 003)",
-       minimum=0.0, exclusive_minimum=True, levels=(1, 2, 3)),
+       minimum=0.0, exclusive_minimum=True, maximum=_STIFFNESS_MAX, levels=(1, 2, 3)),
     _p("contact.damping", 74.0, "N.s/m",
        "roller-tooth contact damping (not in seed 003; about 10 % of critical for one link "
        "mass on the contact spring)", minimum=0.0, levels=(3,)),
@@ -183,16 +192,16 @@ PARAMETERS: tuple[Parameter, ...] = (
        minimum=math.pi / 3, maximum=math.pi, display_unit="deg", levels=(3,)),
     # sprockets
     _p("driver.inertia", 4.0108e-3, "kg.m2", "driver sprocket moment of inertia I1 (seed 003)",
-       minimum=0.0, exclusive_minimum=True),
+       minimum=0.0, exclusive_minimum=True, maximum=_INERTIA_MAX),
     _p("driven.inertia", 9.33e-4, "kg.m2",
        "driven sprocket (and load) moment of inertia I2 (seed 003)", minimum=0.0,
-       exclusive_minimum=True),
+       exclusive_minimum=True, maximum=_INERTIA_MAX),
     _p("driven.damping", 0.0, "N.m.s/rad",
        "viscous damping of the driven shaft d1 (seed 004 eq 50; none in seed 003)", minimum=0.0),
     # input shaft
     _p("input_shaft.stiffness", 12000.0, "N.m/rad",
        "torsional stiffness of the input shaft k_r (seed 003)", minimum=0.0,
-       exclusive_minimum=True, levels=(1, 2, 3)),
+       exclusive_minimum=True, maximum=_SHAFT_STIFFNESS_MAX, levels=(1, 2, 3)),
     _p("input_shaft.damping", 0.69, "N.m.s/rad",
        "torsional damping of the input shaft c_r (not in seed 003; 5 % of critical for the "
        "driver inertia on the shaft spring)", minimum=0.0, levels=(1, 2, 3)),

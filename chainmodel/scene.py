@@ -373,6 +373,8 @@ class Scene:
         params = dict(self.parameters)
         origins = (dict(self.origins) if self.origins is not None
                    else {P.canonical_name(k) or k: "given" for k in params})
+        if "drive.pitch" in params:     # its range first: the chain checks compare it
+            params["drive.pitch"] = P.BY_NAME["drive.pitch"].check(params["drive.pitch"])
         pitch = params.get("drive.pitch", P.BY_NAME["drive.pitch"].default)
         name = self.chain
         self.notes = [n for n in self.notes if not n.startswith(_CHAIN_NOTE)]
@@ -481,9 +483,12 @@ class Scene:
     def from_toml(cls, path: str | Path, **overrides) -> "Scene":
         path = Path(path)
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise ValueError(f"scene file {str(path)!r} does not exist") from None
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"scene file {str(path)!r} is not a text file in UTF-8 (TOML): "
+                             f"{exc.reason} at byte {exc.start}") from None
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"scene file {str(path)!r} is not valid TOML: {exc}") from None
         known = {"name", "preset", "chain", "fidelity", "duration", "output_interval",
@@ -492,6 +497,14 @@ class Scene:
         if unknown:
             raise ValueError(f"scene file {path.name}: unknown keys {sorted(unknown)}; "
                              f"valid: {sorted(known)}")
+        for key in ("operating", "parameters"):
+            if not isinstance(data.get(key, {}), dict):
+                raise ValueError(f"scene file {path.name}: {key} must be a table ([{key}] with "
+                                 f"name = value lines), got {data[key]!r}")
+        for key in ("name", "preset", "chain"):
+            if key in data and not isinstance(data[key], str):
+                raise ValueError(f"scene file {path.name}: {key} must be a string (in quotes), "
+                                 f"got {data[key]!r}")
         base = cls.from_preset(data["preset"]) if "preset" in data else cls("scene", {})
         kw: dict[str, Any] = dict(data.get("operating", {}))
         for key in ("chain", "fidelity", "duration", "output_interval"):
@@ -510,11 +523,25 @@ class Scene:
         forms in ``parameters``. An unknown name raises ValueError listing the closest names."""
         params = dict(self.parameters)
         origins = dict(self.origins) if self.origins is not None else {}
+        if parameters is not None and not isinstance(parameters, Mapping):
+            raise ValueError(f"parameters must be a mapping of parameter name to value (a "
+                             f"dict), got {type(parameters).__name__} {parameters!r:.80}")
+        for key in parameters or {}:
+            if not isinstance(key, str):
+                raise ValueError(f"parameter names must be strings (e.g. 'chain.link_mass'), "
+                                 f"got {key!r} ({type(key).__name__})")
         for key, value in (parameters or {}).items():
             params[P.canonical_name(key) or key] = value    # unknown names: validate() refuses
             origins[P.canonical_name(key) or key] = "given"
         # an assumed chain (none named) follows the pitch; a named one stays and is checked
-        chain = kw.pop("chain", None) or (self.chain if self._chain_named else None)
+        named = kw.pop("chain", None)
+        chain = named or (self.chain if self._chain_named else None)
+        if named and self.chain and named != self.chain:
+            # another chain named: its values replace those the preset or the old chain gave
+            # (not the ones given by hand)
+            from .chains import CHAIN_PARAMETERS
+            origins = {k: v for k, v in origins.items()
+                       if not (k in CHAIN_PARAMETERS and v != "given")}
         op = self.operating
         duration, interval = self.duration, self.output_interval
         static = kw.pop("static_tension", None)

@@ -529,6 +529,30 @@ def test_python_dash_m_entry_point(tmp_path):
 # --- through the FMU (only where it has been built) -------------------------------------------
 
 @pytest.mark.fmu
+def test_run_via_fmu_warns_when_the_fmu_is_another_version(capsys, chaindrive_fmu, tmp_path):
+    """An FMU built from this tree runs without the warning; the same FMU with one file of its
+    embedded chainmodel changed (as an FMU built from another version) gets it, naming the
+    file and the rebuild."""
+    import zipfile
+    argv = ["run", "xu2010", "--fidelity", 0, "--duration", 0.2, "--output-interval", 1e-3]
+    fresh = run_json(capsys, *argv, "--via-fmu", chaindrive_fmu)     # stderr silent
+    assert not any("not built from this chainmodel" in w for w in fresh["warnings"])
+    old = tmp_path / "ChainDrive.fmu"
+    with zipfile.ZipFile(chaindrive_fmu) as src, zipfile.ZipFile(old, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "resources/_vendor/chainmodel/units.py":
+                data += b"\n# another version\n"
+            dst.writestr(item, data)
+    code, out, err = run_cli(capsys, *argv, "--via-fmu", old, "--json")
+    stale = json.loads(out)
+    assert code == 0 and "chainmodel: warning: the FMU" in err
+    (text,) = [w for w in stale["warnings"] if "not built from this chainmodel" in w]
+    assert "1 of its package files differ (chainmodel/units.py)" in text
+    assert "python build_fmu.py" in text
+
+
+@pytest.mark.fmu
 def test_run_via_fmu_matches_the_library(capsys, request):
     try:
         import chainmodel.fmu  # noqa: F401

@@ -147,3 +147,71 @@ def test_iso606_chain_and_seat_radius_limits():
     assert hi == pytest.approx((0.505 * 10.16 + 0.069 * 10.16 ** (1 / 3)) * 1e-3)
     with pytest.raises(ValueError, match="10B"):
         iso606("99Z")
+
+
+# --- the boundary against what a fuzzing user typed (eighteenth session of issue 21) ----------
+
+@pytest.mark.parametrize("kw, fragment", [
+    # a pitch of the wrong type on a scene that names its chain: the range, not the chain check
+    (dict(drive_pitch="0.0254"), r"drive\.pitch must be a finite number in \(0, 1\].*'0\.0254'"),
+    (dict(drive_pitch=math.nan), r"drive\.pitch must be a finite number"),
+    # typos far outside any chain drive: refused with the range, not an overflow
+    (dict(driver_inertia=1e300), r"driver\.inertia must be in \(0, 1e\+06\]"),
+    (dict(drive_centre_distance=1e300), r"drive\.centre_distance must be in \[0, 1000\]"),
+    (dict(chain_link_stiffness=1e20), r"chain\.link_stiffness must be in \(0, 1e\+11\]"),
+    (dict(parameters={1: 2.0}), r"parameter names must be strings.*1 \(int\)"),
+    (dict(parameters=[("chain.link_damping", 1.0)]), r"parameters must be a mapping.*list"),
+])
+def test_bad_values_at_the_library_boundary_name_themselves(kw, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        load_scene("xu2010", **kw)
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ('name = "x"\nparameters = 5\n', r"parameters must be a table.*got 5"),
+    ('name = "x"\noperating = "fast"\n', r"operating must be a table.*'fast'"),
+    ("name = 5\n", r"name must be a string.*got 5"),
+])
+def test_malformed_scene_files_name_the_key(tmp_path, text, fragment):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=fragment):
+        load_scene(str(path))
+
+
+def test_a_binary_scene_file_is_named():
+    import tempfile
+    with tempfile.NamedTemporaryFile(suffix=".toml", delete=False) as fh:
+        fh.write(b"\xff\xfe\x00")
+    try:
+        with pytest.raises(ValueError, match=r"not a text file in UTF-8") as err:
+            load_scene(fh.name)
+        assert fh.name in str(err.value)
+    finally:
+        import os
+        os.unlink(fh.name)
+
+
+def test_naming_another_chain_replaces_the_presets_chain_values_not_the_given_ones():
+    """xu2010 carries seed 003's 10B values; naming the 16B chain takes the 16B's (ISO 606:
+    25.4 mm pitch, 15.88 mm roller), except a value given by hand."""
+    from chainmodel import chains
+    sc = load_scene("xu2010", chain="16B", drive_pitch=0.0254, drive_links=40)
+    values = chains.parameter_values("16B")
+    assert sc.chain == "16B"
+    for key in ("chain.link_mass", "chain.link_stiffness", "contact.stiffness",
+                "chain.roller_radius"):
+        assert sc.parameters[key] == values[key], key
+    mine = load_scene("xu2010", chain="16B", drive_pitch=0.0254, drive_links=40,
+                      chain_link_mass=0.2)
+    assert mine.parameters["chain.link_mass"] == 0.2
+    assert load_scene("xu2010").parameters["contact.stiffness"] == 8.46e6     # seed 003
+
+
+def test_a_chain_far_too_long_is_warned_at_levels_0_and_1_not_a_crash():
+    """300 links on xu2010's 197.7 mm (46 pitches wrap): level 3's statics meet a degenerate
+    layout; levels 0-1 fall back to the seat ladder and say the chain is too long."""
+    for level in (0, 1):
+        r = chainmodel.simulate("xu2010", fidelity=level, drive_links=300, duration=0.02,
+                                output_interval=1e-3)
+        assert any("the chain is too long: drive.links = 300" in w for w in r.warnings)

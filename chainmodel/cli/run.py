@@ -109,6 +109,7 @@ def cmd_run(args) -> int:
                 raise CLIError(f"the FMU {path} failed: {exc} (rebuild it with "
                                "`python build_fmu.py`)") from None
             raise
+        stale = fmu.differing_files(path)
     else:
         n = len(scene.times())
         snapshot_every = max(1, math.ceil(n / 2000)) if args.plot and scene.fidelity >= 1 else 0
@@ -121,6 +122,11 @@ def cmd_run(args) -> int:
             raise
     summary = result.summary()
     out = dict(summary)
+    if fmu_arg is not None and stale:
+        out["warnings"] = list(out.get("warnings", ())) + [
+            f"the FMU {path} was not built from this chainmodel: {len(stale)} of its package "
+            f"files differ ({', '.join(stale[:3])}{', ...' if len(stale) > 3 else ''}), so its "
+            "results are another version's; rebuild it with `python build_fmu.py`"]
     out.update({"input_speed_rad_s": scene.operating.speed,
                 "fidelity_level": int(result.fidelity), "via_fmu": fmu_arg is not None,
                 "samples": len(result.time), "output_interval_s": scene.output_interval,

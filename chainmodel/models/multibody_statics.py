@@ -143,11 +143,20 @@ class _Problem:
         self.q[1] = u[0]
         self.q[2:] = u[1:]
 
+    def _evaluate(self, u):
+        """The force kernel at u (zero velocity); a layout with two rollers on one point has
+        no link direction: ValueError, which the callers take as "no equilibrium found"."""
+        self.set(u)
+        try:
+            return self.fn(self.q, self.v0, self.tau, 0.0, 0.0, self.load, self.P, self.ws,
+                           self.acc)
+        except ZeroDivisionError:
+            raise ValueError("level 3's statics reached a layout with two rollers on one point "
+                             "(a link of zero length): no equilibrium from there") from None
+
     def forces(self, u) -> np.ndarray:
         """F(u) = [driven torque balance, m a of every roller] at zero velocity."""
-        self.set(u)
-        a, status, _ = self.fn(self.q, self.v0, self.tau, 0.0, 0.0, self.load, self.P, self.ws,
-                               self.acc)
+        a, status, _ = self._evaluate(u)
         self.evaluations += 1
         f = np.empty(self.n - 1)
         f[0] = self.I2 * a[1]
@@ -156,8 +165,7 @@ class _Problem:
 
     def potential(self, u) -> float:
         """V(u): links, contacts, gravity and the load's potential load * phi2 [J]."""
-        self.set(u)
-        self.fn(self.q, self.v0, self.tau, 0.0, 0.0, self.load, self.P, self.ws, self.acc)
+        self._evaluate(u)
         z = u[1:].reshape(self.M, 2)
         L = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
         links = float(np.sum(link_potential(L - self.P[K.I_L0], self.P[K.I_K], self.P[K.I_GAP])))
