@@ -84,7 +84,7 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
         f"# Scene file for chainmodel (docs/scenes.md), written by `chainmodel new-scene`.",
         f"# Run it: chainmodel run THIS_FILE [--fidelity 0-3]",
         *[f"# assumed: {n}" for n in notes],
-        f"name = {name!r}".replace("'", '"'),
+        f"name = {_toml_string(name)}",
         f"chain = \"{c.name}\"                # ISO 606 chain: sets link mass, stiffness, radii,",
         f"                              # clearances, contact stiffness, breaking load",
         f"fidelity = \"{fidelity}\"       # 0 kinematic, 1 torsional, 2 modal, 3 multibody",
@@ -195,3 +195,9 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string (JSON's escapes are TOML's for these characters)."""
+    import json
+    return json.dumps(str(text), ensure_ascii=False)

@@ -357,6 +357,11 @@ def validate(values: Mapping[str, Any], base: Mapping[str, Any] | None = None) -
         raise ValueError(
             f"parameter contact.seat_radius ({out['contact.seat_radius']:g} m) must be at least "
             f"chain.roller_radius ({out['chain.roller_radius']:g} m): the roller must fit its seat")
+    if 2.0 * out["chain.roller_radius"] >= out["drive.pitch"]:
+        raise ValueError(
+            f"parameter chain.roller_radius ({out['chain.roller_radius']:g} m) must be below half "
+            f"of drive.pitch ({out['drive.pitch']:g} m): adjacent rollers would overlap (ISO 606 "
+            "rollers are about 0.6 pitch in diameter)")
     stale = _stale_10b_values(out)
     if stale:
         raise ValueError(

@@ -549,6 +549,10 @@ class Scene:
                                 for k in (parameters or {}))
                             or any(P.canonical_name(k) == "chain.pretension" and v is not None
                                    for k, v in kw.items()))
+        if kw.get("input_speed_rpm") is not None and kw.get("input_speed") is not None:
+            raise ValueError(f"give either input_speed_rpm ({kw['input_speed_rpm']!r}) or "
+                             f"input_speed ({kw['input_speed']!r} rad/s), not both: both set "
+                             "the steady input-shaft speed")
         if static is not None and pretension_given:
             raise ValueError("give either static_tension or chain.pretension, not both: "
                              "static_tension sets chain.pretension")

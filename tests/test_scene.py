@@ -161,6 +161,10 @@ def test_iso606_chain_and_seat_radius_limits():
     (dict(chain_link_stiffness=1e20), r"chain\.link_stiffness must be in \(0, 1e\+11\]"),
     (dict(parameters={1: 2.0}), r"parameter names must be strings.*1 \(int\)"),
     (dict(parameters=[("chain.link_damping", 1.0)]), r"parameters must be a mapping.*list"),
+    # rollers wider than half a pitch overlap their neighbours (ISO 606: d1 = 0.62-0.67 p)
+    (dict(chain_roller_radius=0.009, contact_seat_radius=0.0095),
+     r"chain\.roller_radius \(0\.009 m\) must be below half of drive\.pitch"),
+    (dict(input_speed_rpm=100, input_speed=10), r"either input_speed_rpm .* or input_speed"),
 ])
 def test_bad_values_at_the_library_boundary_name_themselves(kw, fragment):
     with pytest.raises(ValueError, match=fragment):

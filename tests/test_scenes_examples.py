@@ -97,6 +97,17 @@ def test_new_scene_writes_a_commented_scene_that_runs(tmp_path, capsys):
     assert code == 2 and err.count("\n") == 1 and "exists" in err
 
 
+def test_new_scene_writes_any_name_as_a_toml_string(tmp_path, capsys):
+    """A name with a quote and a backslash is written escaped and read back as given."""
+    path = tmp_path / "quoted.toml"
+    name = 'conveyor "B" \\ line 2'
+    code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", 19, "--driven-teeth", 38,
+                             "--chain", "08B", "--speed-rpm", 300, "--load-torque", 15,
+                             "--name", name, "-o", path)
+    assert code == 0, err
+    assert load_scene(path).name == name
+
+
 def test_new_scene_from_a_pitch_assumes_the_b_chain_and_refuses_an_unknown_pitch(capsys):
     code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", 17, "--driven-teeth", 34,
                              "--pitch", 19.05, "--speed-rpm", 300, "--load-torque", 60)
