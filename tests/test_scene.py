@@ -219,3 +219,16 @@ def test_a_chain_far_too_long_is_warned_at_levels_0_and_1_not_a_crash():
         r = chainmodel.simulate("xu2010", fidelity=level, drive_links=300, duration=0.02,
                                 output_interval=1e-3)
         assert any("the chain is too long: drive.links = 300" in w for w in r.warnings)
+
+
+def test_a_steady_window_shorter_than_a_tooth_period_is_warned_not_a_silent_nan():
+    """xu2010 at 3 rpm: a driver tooth period is 2 pi / 25 / (3 rpm) = 0.8 s, the steady half of
+    a 1 s run 0.5 s; the tooth ratio is undefined there, and the warning says how long to run."""
+    r = chainmodel.simulate("xu2010", input_speed_rpm=3, duration=1.0, fidelity=1)
+    assert math.isnan(r.summary()["tooth_ratio"])
+    (text,) = [w for w in r.warnings if "less than one driver tooth period" in w]
+    period = 2 * math.pi / 25 / (3 * RPM)
+    assert f"({period:.3g} s" in text
+    longer = chainmodel.simulate("xu2010", input_speed_rpm=3, duration=1.7, fidelity=1)
+    assert not any("less than one driver tooth period" in w for w in longer.warnings)
+    assert longer.summary()["tooth_ratio"] == pytest.approx(25 / 17, rel=1e-3)   # z1 / z2

@@ -111,6 +111,13 @@ def summarise(result) -> dict:
                         "tooth period): the dominant frequency would be an alias and is not "
                         "reported, and the peaks miss the tooth-periodic ripple")
         freq = math.nan
+    turned = abs(float(phi1[-1] - phi1[0])) if phi1.size else 0.0
+    if mesh > 0 and turned < 2 * math.pi / drive.n_driver:
+        need = (2 * math.pi / drive.n_driver) / abs(mean_speed)
+        warnings.append(f"the steady window from {float(t[mask][0]):g} s holds less than one "
+                        f"driver tooth period ({need:.3g} s at {abs(mean_speed):.4g} rad/s): the "
+                        "tooth ratio is not defined (reported as n/a) and the ripples are partial; "
+                        f"run for at least {scene.operating.ramp_time + 2 * need:.3g} s")
     found = getattr(result, "problems", [])
     warnings += [p.text for p in found]
     out = {
