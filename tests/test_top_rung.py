@@ -27,6 +27,7 @@ from chainmodel.integrate import Verlet
 from chainmodel.models import Inputs
 from chainmodel.models.multibody import MultibodyModel
 from chainmodel.scene import load_scene
+from level3_spans import free_spans, span_shape
 from ringdown_check import ring, seat_ladder_spans, two_inertia_frequency
 
 
@@ -111,28 +112,13 @@ def test_c1_energy_bounded_without_dissipation():
 
 
 def _span_shapes(result, centres):
-    """Per snapshot of a level-3 run: the excess length of each free span over its chord [m]
-    (the polyline of the rollers between the last seated ones minus the chord), summed over
-    both spans, computed here from the rollers' positions."""
+    """Per snapshot of a level-3 run with both spans free: the sum of their excess lengths over
+    their chords [m] (tests/level3_spans.py, from the rollers' positions)."""
     out = []
     for _, snap in result.snapshots:
-        engaged = snap["engaged_driver"] | snap["engaged_driven"]
-        m = engaged.size
-        start = int(np.argmax(engaged))
-        order = [(start + j) % m for j in range(m)]
-        total, spans, j = 0.0, 0, 0
-        while j < m:
-            if engaged[order[j]]:
-                j += 1
-                continue
-            a = j
-            while j < m and not engaged[order[j]]:
-                j += 1
-            z = snap["roller_positions"][[order[a - 1]] + order[a:j] + [order[j % m]]]
-            total += float(np.sum(np.hypot(*np.diff(z, axis=0).T)) - np.hypot(*(z[-1] - z[0])))
-            spans += 1
-        if spans == 2:
-            out.append(total)
+        spans = free_spans(snap, centres)
+        if len(spans) == 2:
+            out.append(sum(span_shape(snap["roller_positions"][i])[0] for i in spans.values()))
     return np.array(out)
 
 

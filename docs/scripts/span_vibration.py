@@ -28,6 +28,7 @@ Three tables per scene and speed, from level 3 runs (second half of the run, sna
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -35,43 +36,12 @@ import chainmodel
 from chainmodel.kernels import spans as S
 from chainmodel.loss_balance import OUTPUTS, LossBalance
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
+from level3_spans import free_spans, span_shape  # noqa: E402
+
 DURATION = 1.0
 SNAPSHOT_EVERY = 5            # output points (2e-4 s): every 1 ms
 DAMPING_FACTORS = (0.5, 1.0, 2.0, 4.0, 10.0)
-
-
-def free_spans(snap, centres) -> dict[str, np.ndarray]:
-    """{'upper' / 'lower': the roller indices of the span, from the last seated roller on one
-    sprocket to the first on the other} for one snapshot."""
-    engaged = snap["engaged_driver"] | snap["engaged_driven"]
-    m = engaged.size
-    start = int(np.argmax(engaged))                 # a seated roller: runs do not wrap around
-    order = [(start + j) % m for j in range(m)]
-    axis = centres[1] - centres[0]
-    out = {}
-    j = 0
-    while j < m:
-        if engaged[order[j]]:
-            j += 1
-            continue
-        a = j
-        while j < m and not engaged[order[j]]:
-            j += 1
-        idx = np.array([order[a - 1]] + order[a:j] + [order[j % m]])
-        mid = snap["roller_positions"][idx[idx.size // 2]] - centres[0]
-        out["upper" if axis[0] * mid[1] - axis[1] * mid[0] > 0 else "lower"] = idx
-    return out
-
-
-def span_shape(z: np.ndarray) -> tuple[float, float]:
-    """(excess length over the chord [m], displacement from the chord at its middle [m]) of the
-    polyline z (k, 2)."""
-    chord = z[-1] - z[0]
-    length = float(np.hypot(*chord))
-    along = (z - z[0]) @ (chord / length)
-    across = (z - z[0]) @ (np.array([-chord[1], chord[0]]) / length)
-    excess = float(np.sum(np.hypot(*np.diff(z, axis=0).T))) - length
-    return excess, float(np.interp(0.5 * length, along, across))
 
 
 def measure(path: str, rpm: float) -> dict:
