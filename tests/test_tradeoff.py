@@ -261,6 +261,34 @@ def test_auto_never_uses_a_scene_whose_reference_is_invalid():
     assert auto.choose(sc, ["tight_span.tension"], 0.2, rows=warned + far).source_scene == "far"
 
 
+@pytest.mark.parametrize("factor, added", [(4.53, True), (2.4, False), (0.45, False),
+                                            (0.3, True), (None, False)])
+def test_band_adds_the_joint_friction_factor_only_outside_the_fixed_runs(monkeypatch, factor,
+                                                                         added):
+    """The joint damping's x0.5 and x2 runs stay; its joint-friction factor is one more run
+    when it lies more than 1.25x outside them (x0.4-x2.5), none when the balance gives none."""
+    monkeypatch.setattr(study, "joint_friction_factor", lambda *a, **k: factor)
+    variants = study.band_variants(load_scene("xu2010"))
+    assert variants[:len(study.UNCERTAIN)] == list(study.UNCERTAIN)
+    extra = variants[len(study.UNCERTAIN):]
+    assert extra == ([("chain.joint_damping", factor)] if added else [])
+
+
+def test_joint_friction_factor_is_friction_over_level3_losses():
+    """xu2010 at 120 rpm: the factor is the friction share over the loss share of
+    chainmodel.loss_balance on a level-3 run of three revolutions, written here again; level 3's
+    dampers dissipate less than the friction there (docs/multibody.md), so it is above 1."""
+    from chainmodel.loss_balance import OUTPUTS, LossBalance
+    sc = load_scene("xu2010", input_speed_rpm=120, duration=0.4)
+    factor = study.joint_friction_factor(sc)
+    run = sc.with_overrides(fidelity=3, duration=3 * 0.5 + sc.operating.ramp_time)
+    r = run_scene(run)
+    balance = LossBalance(run.drive, run.parameters)
+    balance.add(r.time, *(r[n] for n in OUTPUTS), run.input_arrays(r.time)[3])
+    loss, friction = balance.shares()
+    assert factor == pytest.approx(friction / loss, rel=1e-9) and factor > 1.0
+
+
 def test_band_overrides_scale_the_values_no_source_gives():
     sc = load_scene("C1")
     p = sc.parameters
