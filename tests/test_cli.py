@@ -577,3 +577,13 @@ def test_run_via_fmu_matches_the_library(capsys, request):
     for key in ("mean_tight_tension_n", "peak_tight_tension_n", "mean_slack_tension_n",
                 "mean_input_torque_nm", "static_span_tension_n"):
         assert data[key] == pytest.approx(lib[key], rel=1e-9), key
+
+
+@pytest.mark.parametrize("text, value", [("-1e3", -1e3), ("-2.5E1", -25.0), ("-.5e1", -5.0),
+                                         ("-5", -5.0)])
+def test_negative_numbers_in_exponent_form_are_values_not_options(capsys, text, value):
+    """`--load-torque -1e3` (argparse before Python 3.13 took it for an option)."""
+    code, out, err = run_cli(capsys, "run", "xu2010", "--fidelity", 0, "--duration", 0.2,
+                             "--output-interval", 1e-3, "--load-torque", text, "--json")
+    assert code == 0, err
+    assert json.loads(out)["load_torque_nm"] == value

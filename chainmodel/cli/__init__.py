@@ -59,6 +59,7 @@ name the single-module CLI had is re-exported here.
 from __future__ import annotations
 
 import argparse
+import re
 import importlib
 import sys
 from typing import Callable, Sequence
@@ -98,7 +99,13 @@ SUBCOMMANDS: list[tuple[str, str]] = [
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line usage errors (``chainmodel: error: ...``, exit status 2)."""
+    """argparse with one-line usage errors (``chainmodel: error: ...``, exit status 2), and
+    negative numbers in exponent form (``--load-torque -1e6``) read as values, not options
+    (argparse before Python 3.13 knows only ``-1`` and ``-1.5``)."""
+
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
     def error(self, message: str):  # noqa: D401 - argparse API
         self.exit(2, f"chainmodel: error: {message} (see '{self.prog} --help')\n")
