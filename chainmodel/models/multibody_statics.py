@@ -391,9 +391,14 @@ def _condensed_modes(k, mass, keep):
     T = np.zeros((k.shape[0], keep.size))
     T[keep, np.arange(keep.size)] = 1.0
     if drop.size:
+        import warnings
         try:
-            T[drop] = -sl.solve(k[np.ix_(drop, drop)], k[np.ix_(drop, keep)], assume_a="sym")
-        except (sl.LinAlgError, ValueError) as exc:
+            with warnings.catch_warnings():
+                # ill-conditioned (a slack chain without gravity: rcond ~1e-25) is no stiffness
+                warnings.simplefilter("error", sl.LinAlgWarning)
+                T[drop] = -sl.solve(k[np.ix_(drop, drop)], k[np.ix_(drop, keep)],
+                                    assume_a="sym")
+        except (sl.LinAlgError, sl.LinAlgWarning, ValueError) as exc:
             raise ValueError(f"level 3's rollers have no static stiffness to condense ({exc})")
         if not np.all(np.isfinite(T)):
             raise ValueError("level 3's rollers have no static stiffness to condense")
