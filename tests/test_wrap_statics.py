@@ -680,3 +680,24 @@ def test_a_chain_hanging_on_its_sag_warns_that_levels_0_1_slack_span_falls_short
     for level in (0, 1, 2):
         r = chainmodel.simulate("xu2010", fidelity=level, duration=0.02)
         assert not [w for w in r.warnings if "falls short of level 3's" in w]
+
+
+def test_a_slack_chain_without_gravity_gives_no_raw_scipy_warning(tmp_path):
+    """No pretension and no gravity on an 08B 19/38 drive whose 110 links wrap tightly (the
+    fuzz's reproducer): level 3's rollers have no static stiffness (the condensed matrix is
+    singular to rcond ~1e-25). The wrap fit is refused in Result.warnings, and scipy's
+    LinAlgWarning does not leak past it."""
+    import warnings
+    import scipy.linalg
+    import chainmodel
+    path = tmp_path / "nogravity.toml"
+    path.write_text('name = "08B 19/38 no gravity"\nchain = "08B"\n[operating]\n'
+                    'input_speed_rpm = 300\nload_torque = 15\n[parameters]\n'
+                    '"drive.driver_teeth" = 19\n"drive.driven_teeth" = 38\n'
+                    '"drive.pitch" = 0.0127\n"drive.links" = 110\n"drive.centre_distance" = 0.0\n'
+                    '"chain.pretension" = 0.0\n"gravity" = 0.0\n')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = chainmodel.simulate(str(path), fidelity=0, duration=0.05, output_interval=1e-3)
+    assert not [w for w in caught if issubclass(w.category, scipy.linalg.LinAlgWarning)]
+    assert any("was not honoured" in w for w in r.warnings)
