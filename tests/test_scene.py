@@ -232,3 +232,21 @@ def test_a_steady_window_shorter_than_a_tooth_period_is_warned_not_a_silent_nan(
     longer = chainmodel.simulate("xu2010", input_speed_rpm=3, duration=1.7, fidelity=1)
     assert not any("less than one driver tooth period" in w for w in longer.warnings)
     assert longer.summary()["tooth_ratio"] == pytest.approx(25 / 17, rel=1e-3)   # z1 / z2
+
+
+def test_a_chain_value_far_from_its_iso_chain_is_questioned():
+    """A link mass typed in grams (16.2 'kg' on a 10B chain of 0.0177 kg per link,
+    chainmodel.chains): the speed refusal it causes names it, and a run that goes ahead
+    carries the question in its warnings. Values within 30x of the chain's are not
+    questioned, nor values the chain filled in."""
+    from chainmodel import chains
+    ref = chains.parameter_values("10B")["chain.link_mass"]
+    with pytest.raises(ValueError, match=r"check the chain first: chain\.link_mass = 16\.2 kg "
+                                         r"is .* x the ISO 606 10B chain's"):
+        chainmodel.simulate("xu2010", chain_link_mass=16.2, duration=0.01)
+    r = chainmodel.simulate("xu2010", fidelity=0, chain_link_mass=16.2, input_speed_rpm=10,
+                            duration=0.2, output_interval=1e-3)
+    (text,) = [w for w in r.warnings if "a unit slip?" in w]
+    assert f"{16.2 / ref:.3g} x" in text
+    assert load_scene("xu2010", chain_link_mass=20 * ref).implausible_chain_values() == []
+    assert load_scene("xu2010").implausible_chain_values() == []
