@@ -28,7 +28,8 @@ figures against a converged level-3 reference. :func:`choose`
 4. **promises** that error (the largest over those neighbouring scenes) only when the answer
    is not extrapolated, the target is met and at least half of the error is the level's own
    (its error against the nominal reference, :data:`MODEL_ERROR_SHARE`) rather than level 3's
-   uncertainty band, which does not carry over between drives; the promise is meant to hold
+   uncertainty band, which does not carry over between drives (not asked of a measured scene
+   itself, whose band was measured: :data:`SAME_SCENE`); the promise is meant to hold
    within 2x on a drive outside the table (tests/test_tradeoff.py measures it). Otherwise
    ``promised`` is False and the message says it cannot promise, and why.
 
@@ -88,6 +89,9 @@ EXTRAPOLATION_DISTANCE = 1.0
 #: the drive may have much more of (an unseen 10B 11/33 drive: 15-45x its neighbour's band,
 #: docs/tradeoff.md "Auditing the promise").
 MODEL_ERROR_SHARE = 0.5
+#: a drive this close to a measured scene (natural-log units; the table keeps six digits) is
+#: that scene: its own band was measured, so the model-error share is not asked of it
+SAME_SCENE = 1e-3
 
 
 def scene_features(scene, model=None) -> dict[str, float]:
@@ -361,7 +365,7 @@ def choose(scene, outputs=None, accuracy=None, rows=None) -> AutoChoice:
             why_not += (f" on all {len(neighbours)} neighbouring measured scenes (this one was "
                         f"measured on {len(by_config.get(best['config'], ()))} of them; its "
                         "level refuses the others)")
-    elif not nominal >= MODEL_ERROR_SHARE * error(best):
+    elif dist[source] > SAME_SCENE and not nominal >= MODEL_ERROR_SHARE * error(best):
         why_not = (f"at the measured neighbours its {100 * error(best):.3g} % is mostly level 3's "
                    f"own uncertainty band (its error against the nominal reference is "
                    f"{100 * nominal:.3g} %); that band comes from values no source gives "

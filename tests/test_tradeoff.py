@@ -87,7 +87,7 @@ def _rule(rows, features, figures, target, accepted_levels):
     nominal references; a configuration meets the target only if measured on every neighbour;
     the cheapest meeting it, else the most accurate (those measured everywhere first). Returns
     (config, its error, met, promised): promised when met and at least half of the error is
-    the level's own (against the nominal reference)."""
+    the level's own (against the nominal reference), or the drive is a measured scene itself."""
     sources = {}
     for r in rows:
         if r["status"] == "ok" and not r["reference_problems"]:
@@ -108,7 +108,8 @@ def _rule(rows, features, figures, target, accepted_levels):
     if ok:
         best = min(ok, key=lambda r: r["wall_per_sim_s"])
         c = best["config"]
-        return c, worst[c], True, nominal[c] >= 0.5 * worst[c]
+        # a measured scene itself (its band measured) needs no model-error share
+        return c, worst[c], True, dist[nearest] <= 1e-3 or nominal[c] >= 0.5 * worst[c]
     best = min(cands, key=lambda r: (seen[r["config"]] < len(near), worst[r["config"]],
                                      r["wall_per_sim_s"]))
     return best["config"], worst[best["config"]], False, False
@@ -189,6 +190,15 @@ def test_auto_promise_holds_within_2x_on_drives_not_in_the_table(scene_kw, outpu
     figures = [f for o in outputs for f in auto.OUTPUT_FIGURES[o]]
     measured = _band_worst(chosen, _level3_band(sc), figures)
     assert measured <= 2.0 * choice.expected_error, (measured, choice.message)
+
+
+def test_auto_promises_on_a_measured_scene_itself_whose_band_was_measured():
+    """The README's example, xu2010 at 120 rpm (a scene of the table): level 0's 12.6 % is mostly
+    the band, but it is this drive's own measured band, so it is promised."""
+    choice = auto.choose(load_scene("xu2010"), ["tight_span.tension"], 0.2)
+    assert choice.source_scene == "xu2010 120 rpm" and choice.distance < 1e-3
+    assert choice.nominal_error < 0.5 * choice.expected_error
+    assert choice.promised and "promised: error <=" in choice.message
 
 
 def test_auto_declines_to_promise_an_error_that_is_mostly_the_reference_band():
