@@ -647,32 +647,12 @@ class Scene:
                          f"({model.name}): {why}"
                          + (f"; but check the chain first: {'; '.join(odd)}" if odd else ""))
 
-    #: a chain value given this many times above or below its ISO 606 chain's is questioned
-    #: (a unit slip: grams for kilograms, N/mm for N/m)
-    IMPLAUSIBLE_RATIO = 30.0
-
     def implausible_chain_values(self) -> list[str]:
-        """The chain values given (not filled from the chain) that are more than
-        IMPLAUSIBLE_RATIO times above or below the scene's ISO 606 chain's (chainmodel.chains),
-        as sentences; empty without such a chain."""
-        from . import chains as C
-        if not self.chain or self.chain not in C.chain_names():
-            return []
-        values = C.parameter_values(self.chain)
-        out = []
-        for name, ref in values.items():
-            given = self.parameters.get(name)
-            origin = (self.origins or {}).get(name)
-            if (origin != "given" or not isinstance(given, float) or not isinstance(ref, float)
-                    or given <= 0 or ref <= 0):
-                continue
-            ratio = given / ref
-            if ratio > self.IMPLAUSIBLE_RATIO or ratio < 1 / self.IMPLAUSIBLE_RATIO:
-                unit = P.BY_NAME[name].unit
-                out.append(f"{name} = {given:g} {unit} is {ratio:.3g} x the ISO 606 "
-                           f"{self.chain} chain's {ref:.4g} {unit} (chainmodel.chains): a unit "
-                           "slip?")
-        return out
+        """The chain values more than 30x above or below the nearest ISO 606 chain's of the
+        drive's pitch, as sentences (:func:`chainmodel.validity.implausible_values`, which the
+        run's warnings and the FMU log give too)."""
+        from .validity import implausible_values
+        return [p.text for p in implausible_values(self.drive, self.parameters)]
 
     def input_arrays(self, times):
         """The inputs at many times: (angle, speed, acceleration, torque) arrays

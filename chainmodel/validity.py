@@ -102,7 +102,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "damper_losses": "level 3's dampers dissipate more than joint friction would",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
           "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
-          "slack_span_sag": "slack span below level 3's on a chain hanging on its sag"}
+          "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
+          "implausible_value": "a chain value far from its ISO 606 chain's"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -115,16 +116,55 @@ def chain_play(drive: Drive, params: Mapping[str, Any]) -> float:
 def geometry_problems(drive: Drive, params: Mapping[str, Any],
                       level: int | None = None) -> list[Problem]:
     """The chain too long or too short for its centre distance by more than its play (module
-    docstring), and an option the model could not honour, or honoured on a weaker fit
-    (``torsional.wrap_statics``; with ``level``, that level's own fit too)."""
+    docstring), an option the model could not honour, or honoured on a weaker fit
+    (``torsional.wrap_statics``; with ``level``, that level's own fit too), and chain values
+    far from every ISO 606 chain of the pitch (:func:`implausible_values`)."""
+    odd = implausible_values(drive, params)
     if drive.links is None:
-        return []
+        return odd
     length = _length_problems(drive, params)
     wrap = _wrap_statics_problems(drive, params, level)
     if length and wrap and wrap[0].code == "wrap_statics_unavailable":
         # the length is the cause: one warning, which says what it also costs (the wrap fit)
-        return [Problem(length[0].code, f"{length[0].message}. Therefore {wrap[0].message}")]
-    return length + wrap
+        return odd + [Problem(length[0].code,
+                              f"{length[0].message}. Therefore {wrap[0].message}")]
+    return odd + length + wrap
+
+
+#: a chain value this many times above or below the nearest ISO 606 chain's of the drive's
+#: pitch is questioned (a unit slip: grams for kilograms, N/mm for N/m); the presets' seed
+#: values lie within 4.5x of theirs
+IMPLAUSIBLE_RATIO = 30.0
+
+
+def implausible_values(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
+    """Each chain value (chainmodel.chains.CHAIN_PARAMETERS) more than IMPLAUSIBLE_RATIO times
+    above or below the closest of the ISO 606 chains of ``drive.pitch`` (none for a pitch no
+    chain here has): a warning naming the value, the chain's and the ratio."""
+    from .chains import chains_of_pitch, parameter_values
+    refs = [(name, parameter_values(name)) for name in chains_of_pitch(drive.pitch)]
+    out = []
+    for key in (refs[0][1] if refs else {}):
+        given = params.get(key)
+        if key == "drive.pitch" or isinstance(given, bool) or not isinstance(given, (int, float)):
+            continue
+        near = [(abs(math.log(given / v[key])), name, v[key]) for name, v in refs
+                if given > 0 and isinstance(v.get(key), float) and v[key] > 0]
+        if not near:
+            continue
+        gap, name, ref = min(near)
+        if gap > math.log(IMPLAUSIBLE_RATIO):
+            unit = _unit(key)
+            out.append(Problem("implausible_value", (
+                f"{key} = {given:g} {unit} is {given / ref:.3g} x the value of the nearest "
+                f"ISO 606 chain of this pitch ({name}: {ref:.4g} {unit}, chainmodel.chains): "
+                "a unit slip?")))
+    return out
+
+
+def _unit(name: str) -> str:
+    from .parameters import BY_NAME
+    return BY_NAME[name].unit if name in BY_NAME else ""
 
 
 def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],

@@ -632,3 +632,17 @@ def test_a_chain_hanging_on_its_sag_logs_the_slack_span_warning(chaindrive_fmu_d
         assert len(warned) == 1 and "level 2 or 3" in warned[0]
     finally:
         s.free()
+
+
+def test_a_chain_value_far_from_its_chain_is_logged_as_a_warning(chaindrive_fmu_dir):
+    """A link mass typed in grams set through the FMU's parameters (xu2010's 15.875 mm pitch,
+    whose ISO 606 chains have about 0.02 kg per link) is logged as fmi2Warning at
+    initialization: chainmodel.validity's implausible_value, as the library's warnings."""
+    s = Slave(chaindrive_fmu_dir)
+    try:
+        s.set_parameters({"chain.link_mass": 16.2, "fidelity": 0})
+        s.fmu.exitInitializationMode()
+        warned = [m for status, m in s.log.messages if status == 1 and "a unit slip?" in m]
+        assert len(warned) == 1 and "chain.link_mass = 16.2 kg" in warned[0]
+    finally:
+        s.free()

@@ -120,7 +120,6 @@ def summarise(result) -> dict:
                         f"run for at least {scene.operating.ramp_time + 2 * need:.3g} s")
     found = getattr(result, "problems", [])
     warnings += [p.text for p in found]
-    warnings += scene.implausible_chain_values()
     out = {
         "scene": scene.name,
         "fidelity": result.fidelity_name,
