@@ -31,7 +31,8 @@ import numpy as np
 
 from .geometry import Drive
 
-__all__ = ["FRICTION", "RATIO", "EXCESS", "OUTPUTS", "pin_radius", "LossBalance"]
+__all__ = ["FRICTION", "RATIO", "EXCESS", "OUTPUTS", "pin_radius", "LossBalance",
+           "balance_duration", "run_shares"]
 
 #: pin-bushing friction coefficient (lubricated steel on steel; docs/multibody.md)
 FRICTION = 0.1
@@ -168,3 +169,21 @@ class LossBalance:
                 f"torque and the span tensions carry damping no source gives; lower "
                 f"chain.joint_damping, or read the result with the trade study's damping band "
                 f"(docs/multibody.md)")
+
+
+def balance_duration(scene, at_least: float = 0.0) -> float:
+    """A run long enough for the balance [s]: its window starts once the driver has turned one
+    revolution and needs one more, so three revolutions after the ramp (at least ``at_least``);
+    ``scene`` a chainmodel.scene.Scene."""
+    op = scene.operating
+    revolutions = 3.0 * 2.0 * math.pi / abs(op.speed) if op.speed else 0.0
+    return max(at_least, revolutions + op.ramp_time)
+
+
+def run_shares(result) -> tuple[float, float] | None:
+    """:meth:`LossBalance.shares` (loss, joint friction) over a whole run (a
+    chainmodel.simulation.Result with the :data:`OUTPUTS`), None as there."""
+    sc = result.scene
+    balance = LossBalance(sc.drive, sc.parameters)
+    balance.add(result.time, *(result[n] for n in OUTPUTS), sc.input_arrays(result.time)[3])
+    return balance.shares()

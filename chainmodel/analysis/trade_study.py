@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fidelity_auto import parse_rows as _parse_rows, scene_features
-from ..loss_balance import OUTPUTS as _BALANCE_OUTPUTS, LossBalance
+from ..loss_balance import balance_duration, run_shares
 from ..models.base import SimulationDiverged
 from ..parameters import FIDELITY_NAMES
 from ..scene import Scene, load_scene
@@ -193,18 +193,14 @@ def joint_friction_factor(base: Scene, cache_dir: Path | None = None,
     after one and needs one more). None where the balance has no window, no ISO 606 chain or
     no loss; cached under ``cache_dir``."""
     sc = base.with_overrides(fidelity=3)
-    revolutions = 3.0 * 2.0 * math.pi / abs(sc.operating.speed) if sc.operating.speed else 0.0
-    sc = sc.with_overrides(duration=max(sc.duration, revolutions + sc.operating.ramp_time))
+    sc = sc.with_overrides(duration=balance_duration(sc, sc.duration))
     path = None
     if cache_dir is not None:
         path = Path(cache_dir) / f"friction_{_cache_key(sc)}.json"
         if path.exists():
             return json.loads(path.read_text())["factor"]
     log(f"{sc.name}: joint friction against level 3's losses ({sc.duration:.3g} s) ...")
-    r = run_scene(sc)
-    balance = LossBalance(sc.drive, sc.parameters)
-    balance.add(r.time, *(r[n] for n in _BALANCE_OUTPUTS), sc.input_arrays(r.time)[3])
-    shares = balance.shares()
+    shares = run_shares(run_scene(sc))
     factor = shares[1] / shares[0] if shares is not None and shares[0] > 0 else None
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import chainmodel
-from chainmodel.loss_balance import OUTPUTS, LossBalance
+from chainmodel.loss_balance import balance_duration, run_shares
 
 ROOT = Path(__file__).resolve().parents[2]
 CASES = (("xu2010", 30.0), ("xu2010", 120.0), ("C1", 100.0),
@@ -33,12 +33,8 @@ def losses(scene, rpm=None):
     """(scene, mean driver speed [rad/s], loss, friction as shares of the input work)."""
     kw = {} if rpm is None else {"input_speed_rpm": rpm}
     sc = chainmodel.load_scene(scene, fidelity=3, **kw)
-    # the balance starts after one driver revolution and needs one more: three in all
-    revs = 3.0 * 2 * np.pi / sc.operating.speed + sc.operating.ramp_time
-    r = chainmodel.simulate(sc, duration=max(1.0, revs))
-    balance = LossBalance(sc.drive, sc.parameters)
-    balance.add(r.time, *(r[n] for n in OUTPUTS), sc.input_arrays(r.time)[3])
-    loss, friction = balance.shares()
+    r = chainmodel.simulate(sc, duration=balance_duration(sc, 1.0))
+    loss, friction = run_shares(r)
     return sc, float(np.mean(r["driver.speed"][r.time >= 0.5 * r.time[-1]])), loss, friction
 
 

@@ -34,7 +34,7 @@ import numpy as np
 
 import chainmodel
 from chainmodel.kernels import spans as S
-from chainmodel.loss_balance import OUTPUTS, LossBalance
+from chainmodel.loss_balance import balance_duration, run_shares
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from level3_spans import free_spans, span_shape  # noqa: E402
@@ -127,16 +127,13 @@ def damping_table(path: str, speeds) -> None:
         ratio = float("nan")
         for f in DAMPING_FACTORS:
             sc = chainmodel.load_scene(path, input_speed_rpm=rpm, fidelity=3)
-            # the loss balance starts after one driver revolution and needs one more
-            duration = max(DURATION, 3.0 * 2 * np.pi / sc.operating.speed + sc.operating.ramp_time)
+            duration = balance_duration(sc, DURATION)
             sc = sc.with_overrides({"chain.joint_damping": f * base}, duration=duration)
             r = chainmodel.simulate(sc, output_interval=5e-4)
             w = r.time >= 0.5 * duration
             cells.append(f"{r['tight_span.tension'][w].mean():5.0f}/{r['slack_span.tension'][w].mean():5.0f}")
             if f == 1.0:
-                balance = LossBalance(sc.drive, sc.parameters)
-                balance.add(r.time, *(r[n] for n in OUTPUTS), sc.input_arrays(r.time)[3])
-                shares = balance.shares()
+                shares = run_shares(r)
                 if shares is not None:
                     ratio = shares[0] / shares[1]
         print(f"{rpm:5.0f} " + " ".join(f"{c:>11s}" for c in cells) + f"  {ratio:.2f}", flush=True)
