@@ -204,22 +204,22 @@ def test_auto_promises_on_a_measured_scene_itself_whose_band_was_measured():
 def test_auto_declines_to_promise_an_error_that_is_mostly_the_reference_band():
     """Level 3 at its own step has almost no error against the nominal reference; its table
     error is the neighbour's uncertainty band, which does not carry over: auto says it cannot
-    promise. On this unseen 10B 11/33 drive the band, measured here, is far wider than its
-    neighbour's on the driven speed (before the rule, auto promised 7.8 % there and the worst
-    case was 312-348 %; docs/tradeoff.md, "Auditing the promise")."""
+    promise. On this unseen 10B 11/33 drive (before the rule auto promised 7.8 % on the driven
+    speed and the worst case was 312-348 %; docs/tradeoff.md, "Auditing the promise"), the
+    level's own share of the error, measured here against the nominal reference of the
+    neighbour, is below half."""
     path = Path(__file__).resolve().parents[1] / "docs/scripts/unseen_drives/10b_11_33.toml"
     sc = load_scene(str(path), input_speed_rpm=300, duration=0.3)
     choice = auto.choose(sc, ["tight_span.tension"], 0.2)
     assert choice.level == 3 and choice.met and not choice.promised
     assert "uncertainty band" in choice.why_not and "cannot promise" in choice.message
     assert choice.nominal_error < 0.5 * choice.expected_error
-    figures = auto.OUTPUT_FIGURES["driven.speed"]
-    runs = _level3_band(sc)
-    here = max((max(r[f] for r in runs) - min(r[f] for r in runs)) / 2 / abs(runs[0][f])
-               for f in figures)
-    rows = [r for r in auto.table() if r["scene"] in choice.neighbours]
-    there = max(r[f"band_{f}"] for r in rows for f in figures)
-    assert here > 3.0 * there, (here, there)
+    rows = [r for r in auto.table() if r["scene"] in choice.neighbours
+            and r["config"] == choice.config]
+    figures = auto.OUTPUT_FIGURES["tight_span.tension"]
+    own = max(r[f"errnom_{f}"] for r in rows for f in figures)
+    band = max(r[f"band_{f}"] for r in rows for f in figures)
+    assert own < 0.5 * (own + band)
 
 
 @pytest.mark.parametrize("preset, rpm", [
@@ -248,14 +248,8 @@ def test_auto_declines_to_promise_far_from_the_table_and_says_why():
     far = auto.choose(load_scene("xu2010", input_speed_rpm=5), ["tight_span.tension"], 0.2)
     assert not far.promised and far.extrapolated
     assert "cannot promise" in far.message and "meshing frequency" in far.why_not
-    # the coarse 6/9 drive is in the table, but its reference runs outside level 3's validity
-    # (contact force above the breaking load): never a source, so auto does not promise there
-    coarse = next(s for s in study.SCENES if s.name == "coarse 6/9 300 rpm")
-    rows = [r for r in auto.table() if r["scene"] == coarse.name]
-    assert rows and all(r["reference_problems"] for r in rows)
-    c = auto.choose(coarse.scene(), ["tight_span.tension"], 0.2)
-    assert c.source_scene != coarse.name and coarse.name not in c.neighbours
-    assert not c.promised and "away" in c.why_not
+    # (a scene whose reference is invalid is never a source: the synthetic table of
+    # test_auto_never_uses_a_scene_whose_reference_is_invalid below)
 
 
 def test_auto_never_uses_a_scene_whose_reference_is_invalid():
@@ -395,10 +389,12 @@ def test_update_doc_block_replaces_only_between_its_markers(tmp_path):
 
 
 def test_study_marks_a_scene_whose_reference_is_invalid():
-    """A 3-tooth driver skips teeth at level 3 (Result.valid False, tests/test_validity.py):
-    the study keeps the scene, marked, with no errors, and the tables say so."""
-    spec = study.SceneSpec("3 teeth", "xu2010", dict(drive_driver_teeth=3,
-                                                     drive_centre_distance=0.0, duration=0.8))
+    """A slack chain under a heavy load skips teeth at level 3 (Result.valid False,
+    tests/test_validity.py): the study keeps the scene, marked, with no errors, and the
+    tables say so."""
+    spec = study.SceneSpec("skipping", "xu2010", dict(drive_links=48, static_tension=None,
+                                                      chain_pretension=0.0, load_torque=200.0,
+                                                      duration=0.6))
     rows = study.run_study([spec], [study.CONFIGS[0]], repeats=1, cache_dir=None, uncertain=())
     (row,) = rows
     assert row["status"] == "reference invalid" and row["reference_valid"] == 0

@@ -22,8 +22,10 @@ from .multibody_layout import (I_C, I_C2, I_CC, I_CG1, I_CG2, I_CJ, I_CR, I_CX, 
                                I_GX, I_GY, I_I1, I_I2, I_K, I_KC, I_KR, I_L0, I_LMAX, I_LMIN, I_M,
                                I_ONSET, I_PAPER_CONTACT, I_PAPER_DAMP, I_PH1, I_PH2, I_QF, I_R1,
                                I_R2, I_REACH1, I_REACH2, I_RIGID, I_SG1, I_SG2, I_TA1, I_TA2,
-                               I_TIP1, I_TIP2, I_Z1, I_Z2, N_PARAMS, R_BRANCH, R_CL, R_CONTACT,
-                               R_DX, R_DY, R_EX, R_EY, R_L, R_OMEGA, R_TS, Workspace)
+                               I_TIP1, I_TIP2, I_RR, I_PITCH, I_CUT1, I_ASL1, I_AU1, I_KSL1,
+                               I_KU1, I_CUT2, I_ASL2, I_AU2, I_KSL2, I_KU2, I_Z1, I_Z2,
+                               N_PARAMS, R_BRANCH, R_CL, R_CONTACT, R_DX, R_DY, R_EX, R_EY, R_L,
+                               R_OMEGA, R_TS, Workspace)
 
 __all__ = ["geometry_pass", "forces_pass", "accelerations", "omega_bound", "accel",
            "link_potential"]
@@ -139,6 +141,11 @@ def geometry_pass(q, tau, P, dist, seat_angle, scr):
                 zt = z1
                 tab = N_PARAMS
                 reach = P[I_REACH1]
+                cut = P[I_CUT1]
+                asl = P[I_ASL1]
+                au = P[I_AU1]
+                ksl = P[I_KSL1]
+                ku = P[I_KU1]
             else:
                 cx = 0.0
                 cy = 0.0
@@ -153,6 +160,11 @@ def geometry_pass(q, tau, P, dist, seat_angle, scr):
                 zt = z2
                 tab = N_PARAMS + 2 * z1
                 reach = P[I_REACH2]
+                cut = P[I_CUT2]
+                asl = P[I_ASL2]
+                au = P[I_AU2]
+                ksl = P[I_KSL2]
+                ku = P[I_KU2]
             rx = x - cx
             ry = y - cy
             if rx * rx + ry * ry > reach * reach:
@@ -192,6 +204,40 @@ def geometry_pass(q, tau, P, dist, seat_angle, scr):
                         pen = abs(tl) * sg - sl * cg - dR
                         nx = -sgn * sg * st - cg * ct
                         ny = sgn * sg * ct - cg * st
+                        u = abs(tl)
+                        if cut != 0.0 and sl * au - u * asl > 0.0:
+                            # the tooth cut by the articulation path (articulation_cut): on the
+                            # side of the line neighbour-seat the path sweeps, its circle about
+                            # the neighbour seat and the rounded corner where it meets the
+                            # flank; each only lowers the penetration
+                            gs = 0.0
+                            gu = 0.0
+                            ks = sl - ksl
+                            kt = u - ku
+                            # in the corner's normal cone: between the flank's outward normal
+                            # (cg, -sg) and the circle's, (ksl - asl, ku - au) / (p - R_r),
+                            # on their side of the corner (not the opposite cone, inside)
+                            cs = ksl - asl
+                            cu = ku - au
+                            if (cg * kt + sg * ks >= 0.0 and ks * cu - kt * cs >= 0.0
+                                    and (ks * cg - kt * sg) * (P[I_PITCH] - P[I_RR])
+                                    + ks * cs + kt * cu > 0.0):
+                                dk = math.sqrt(ks * ks + kt * kt)
+                                if dk > 0.0:
+                                    pen = P[I_RR] - dk
+                                    gs = -ks / dk
+                                    gu = -kt / dk
+                            else:
+                                es = sl - asl
+                                et = u - au
+                                da = math.sqrt(es * es + et * et)
+                                if P[I_PITCH] - da < pen:
+                                    pen = P[I_PITCH] - da
+                                    gs = -es / da
+                                    gu = -et / da
+                            if gs != 0.0 or gu != 0.0:
+                                nx = gs * ct - sgn * gu * st
+                                ny = gs * st + sgn * gu * ct
             scr[row] = pen
             scr[row + M] = nx
             scr[row + 2 * M] = ny

@@ -24,8 +24,9 @@ origin, driver C at (x_c, y_c)), sprocket rotations phi1, phi2 forward positive 
   angle about that sprocket's centre, from the sprocket's current rotation (so the assignment
   holds for ever, whatever M and z). The seat is the paper's circle of radius R_t about the seat
   centre (clearance R_t - R_r) over the ISO 606 seating angle, continued by straight flanks
-  tangent to it (the paper's circle alone, eq 9, is kept as ``contact.seating_angle >= pi``).
-  Penetration delta gives the normal force F_n = max(0, k_c delta + c_c delta') on the roller
+  tangent to it (the paper's circle alone, eq 9, is kept as ``contact.seating_angle >= pi``);
+  on sprockets of 11 teeth or fewer the flank is cut where a roller articulating about its
+  seated neighbour passes (:func:`articulation_cut`). Penetration delta gives the normal force F_n = max(0, k_c delta + c_c delta') on the roller
   (towards the seat), and its reaction on the sprocket.
 * Gravity points along -Y rotated by (theta1 - drive.inclination).
 * ``multibody.rotating_frame_forces`` adds the appendix's Q (eqs A4-A7) on seated rollers;
@@ -91,6 +92,59 @@ def flank_geometry(teeth: int, pitch: float, seating_angle: float) -> tuple[floa
     return gamma, math.pi / 2 - gamma, pitch * (0.5625 - 0.4 / teeth)
 
 
+def articulation_cut(teeth: int, pitch: float, gamma: float, tip: float, roller_radius: float,
+                     seat_radius: float) -> tuple[bool, float, float, float, float]:
+    """Where the straight flank of :func:`flank_geometry` stands in the way of the chain's
+    articulation: (active, a_sl, a_u, k_sl, k_u), in a seat's frame (sl outward along its radial,
+    u along the pitch circle towards the neighbouring seat).
+
+    A roller entering or leaving a seat turns about the roller seated next to it: its centre
+    runs on the circle of radius p about the neighbouring seat centre (a_sl, a_u) =
+    (-R (1 - cos 2 pi/z), R sin 2 pi/z), R the pitch radius, and the roller sweeps the band
+    p - R_r ... p + R_r about it on the outer side of the line neighbour-seat. A sprocket the
+    chain can wrap over has no tooth there (kinematics: the chain must articulate over its teeth
+    even at rest). The straight flank stands in it on small sprockets: its roller-centre line
+    meets that circle below the tooth tip for z <= 11 (08A, 10B and 16B at seating angle
+    120 deg), so every roller entering or leaving such a sprocket was pressed into the flank, by
+    up to 0.66 mm at 9 teeth even at rest, and the chain could not wrap without stretching.
+    Active where the flank's roller-centre line (offset by the clearance) crosses the circle of
+    radius p below ``tip``; the kernel then cuts the tooth by the circle of radius p - R_r on
+    the swept side, with its corner (k_sl, k_u), where the surface flank meets that circle,
+    rounded by the roller (kernels.multibody_forces.geometry_pass; tests/test_articulation.py).
+    Elsewhere (active False: every sprocket of 12 teeth or more at 120 deg) nothing changes.
+    """
+    inactive = (False, 0.0, 0.0, 0.0, 0.0)
+    if gamma >= math.pi / 2:
+        return inactive
+    R = pitch / (2.0 * math.sin(math.pi / teeth))
+    ta = 2.0 * math.pi / teeth
+    a = (-R * (1.0 - math.cos(ta)), R * math.sin(ta))
+    direction = (math.sin(gamma), math.cos(gamma))      # along the flank, outward
+
+    def exit_point(offset: float, radius: float):
+        """Where the line tangent to the seat circle of radius ``offset`` at gamma leaves the
+        circle of ``radius`` about the neighbour going outward (None: it does not meet it)."""
+        q0 = (-offset * math.cos(gamma), offset * math.sin(gamma))
+        w = (q0[0] - a[0], q0[1] - a[1])
+        b = direction[0] * w[0] + direction[1] * w[1]
+        disc = b * b - (w[0] * w[0] + w[1] * w[1] - radius * radius)
+        if disc < 0.0:
+            return None
+        s = -b + math.sqrt(disc)
+        return (q0[0] + s * direction[0], q0[1] + s * direction[1])
+
+    centre_line = exit_point(seat_radius - roller_radius, pitch)
+    if centre_line is None or centre_line[0] > tip:
+        return inactive
+    corner = exit_point(seat_radius, pitch - roller_radius)
+    if corner is None:  # pragma: no cover - the surface line is the centre line offset by R_r
+        return inactive
+    # a convex corner: the circle's outward normal turns from the flank's (cos g, -sin g)
+    # towards the outward radial (the kernel's normal-cone test takes this orientation)
+    assert math.cos(gamma) * (corner[1] - a[1]) + math.sin(gamma) * (corner[0] - a[0]) > 0.0
+    return True, a[0], a[1], corner[0], corner[1]
+
+
 #: settled static tensions per (drive, parameters): a scene's every run asks for the same one
 _STATIC_CACHE: dict = {}
 
@@ -139,7 +193,13 @@ class MultibodyModel(Model):
             q_forces=float(p["multibody.rotating_frame_forces"]),
             rigid_shaft=float(p["input_shaft.rigid"]), l_min=0.5 * pitch, l_max=1.5 * pitch,
             z1=drive.n_driver, z2=drive.n_driven, cj=p["chain.joint_damping"],
-            gap=p["chain.joint_clearance"], onset=DAMPING_ONSET)
+            gap=p["chain.joint_clearance"], onset=DAMPING_ONSET,
+            roller_radius=p["chain.roller_radius"], pitch=pitch)
+        for side, teeth, g in (("1", drive.n_driver, g1), ("2", drive.n_driven, g2)):
+            cut = articulation_cut(teeth, pitch, g[0], g[2], p["chain.roller_radius"],
+                                   p["contact.seat_radius"])
+            for key, value in zip(("cut", "cut_sl", "cut_u", "corner_sl", "corner_u"), cut):
+                vals[key + side] = float(value)
         # rollers farther than this from a sprocket centre cannot touch its teeth (the flank
         # ends at tip; sl <= tip needs |r| cos(pi / z) <= R + tip); 0.1 p keeps the engaged
         # test of the outputs inside it
@@ -148,7 +208,8 @@ class MultibodyModel(Model):
             vals[key] = (R + max(tip, 0.1 * pitch)) / math.cos(math.pi / teeth) + clearance
         self.P = K.pack_tables(np.array([vals[f] for f in K.PARAM_FIELDS], float))
         self.flank = {"gamma_driver": g1[0], "gamma_driven": g2[0], "tip_driver": g1[2],
-                      "tip_driven": g2[2], "clearance": clearance}
+                      "tip_driven": g2[2], "clearance": clearance,
+                      "cut_driver": bool(vals["cut1"]), "cut_driven": bool(vals["cut2"])}
         self.ws = K.Workspace(M)
         # fixed points in the middle of each span's straight line in the reference layout: the
         # span tension is measured in the link whose midpoint is nearest to them
