@@ -32,8 +32,10 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
 * **teeth skipped** (levels 1-3): at every whole driver tooth period (driver angle
   phi1_0 + k 2 pi / z1) the transmission error phi2 - (z1 / z2) phi1 returns to its start while
   the chain stays seated (the tooth-periodic polygon part cancels). A change of more than half
-  a driven tooth, pi / z2, means a roller has passed a tooth tip: invalid. Over k periods that
-  is a mean speed ratio off z1 / z2 by more than 1 / (2k) relative.
+  a driven tooth, pi / z2, plus what the chain's slack lets the driven sprocket lag
+  (:func:`skip_threshold`: a chain too long offsets it once as the load takes the slack up),
+  means a roller has passed a tooth tip: invalid. Over k periods that is a mean speed ratio
+  off z1 / z2 by more than 1 / (2k) relative (for a taut chain).
 * **damper losses** (level 3): the power its chain loses (only in its dampers) against the
   pin-bushing friction the joint dampers stand in for (:mod:`chainmodel.loss_balance`): a
   warning when the loss exceeds twice that friction by more than 2 % of the input work.
@@ -111,6 +113,21 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
 def chain_play(drive: Drive, params: Mapping[str, Any]) -> float:
     """Length the chain gives or takes without load [m]: M ``chain.joint_clearance``."""
     return (drive.links or 0) * float(params.get("chain.joint_clearance", 0.0))
+
+
+def skip_threshold(drive: Drive, params: Mapping[str, Any]) -> float:
+    """The driven sprocket's drift from the tooth ratio [rad] beyond which a tooth was skipped:
+    half a driven tooth, pi / z2, plus what the chain's slack lets it lag without skipping, its
+    length beyond the shortest wrapping length over a tooth period (seed 004 eq 13) with its
+    joints' play (:func:`chain_play`), taken up along the driven pitch circle. A chain too long
+    for its centre distance offsets the driven sprocket by up to that slack when the load takes
+    it up; a skipped tooth moves it by a whole tooth more each time."""
+    half = math.pi / drive.n_driven
+    if drive.links is None:
+        return half
+    lmin = _wrap_range(drive)[0]
+    slack = max(0.0, drive.links * drive.pitch + chain_play(drive, params) - lmin)
+    return half + slack / drive.driven.pitch_radius
 
 
 def geometry_problems(drive: Drive, params: Mapping[str, Any],
@@ -312,7 +329,7 @@ class Monitor:
         if self.level == 3:
             self._force_alarm = min(self._force_alarm, self.params["contact.stiffness"]
                                     * seat_clearance_limit(self.params))
-        self._half_tooth = math.pi / drive.n_driven
+        self._half_tooth = skip_threshold(drive, self.params)
         self._losses = LossBalance(drive, self.params) if self.level == 3 else None
         self._loss_ix = (tuple(names.index(n) for n in LOSS_OUTPUTS)
                          if self._losses is not None and names is not None
@@ -485,14 +502,19 @@ class Monitor:
                 out.append(Problem("damper_losses", why))
         if self.level >= 1:
             half = math.pi / d.n_driven
-            if abs(s.drift) > half:
+            limit = skip_threshold(d, self.params)
+            slack = limit - half
+            if abs(s.drift) > limit:
                 ratio = (d.tooth_ratio + s.last_drift / (s.last_k * self.period)
                          if s.last_k else math.nan)
                 teeth = s.drift / (2 * math.pi / d.n_driven)
                 out.append(Problem("teeth_skipped", (
                     f"teeth skipped: by t = {s.t_drift:.4g} s the driven sprocket is "
                     f"{teeth:+.3g} driven teeth off the chain (more than half a tooth, pi / z2 = "
-                    f"{half:.4g} rad, at a whole driver tooth period); the mean speed ratio over "
+                    f"{half:.4g} rad"
+                    + (f", plus the {slack:.3g} rad the chain's slack lets it lag" if slack > 0
+                       else "")
+                    + f", at a whole driver tooth period); the mean speed ratio over "
                     f"{s.periods} whole driver tooth periods is {ratio:.6g} against the exact "
                     f"tooth ratio {d.n_driver}/{d.n_driven} = {d.tooth_ratio:.6g}: the chain "
                     f"jumps teeth and the result is not a working drive; use more teeth on the "

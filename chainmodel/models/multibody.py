@@ -270,6 +270,33 @@ class MultibodyModel(Model):
             return phi2_k
 
     def initial_state(self, u: Inputs) -> np.ndarray:
+        """At rest, the chain wrapped with straight spans (:meth:`straight_layout`). A chain too
+        long for straight spans (a link shorter than its free length by more than the
+        pin-bushing play: its plates would bear) starts from its static equilibrium instead,
+        its spans hanging in their sag (:func:`~chainmodel.models.multibody_statics
+        .static_state`, no load, the driver at u.angle): from the straight layout such a
+        chain starts with its links in compression (112 kN on xu2010 with two links too many),
+        a start-up shock the load did not cause. Where the statics find no equilibrium, the
+        straight layout."""
+        x = self.straight_layout(u)
+        n = 2 + 2 * self.M
+        z = x[2:n].reshape(self.M, 2)
+        length = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
+        if np.min(length) >= self.P[K.I_L0] - self.P[K.I_GAP]:
+            return x
+        from .multibody_statics import static_state
+        try:
+            sol = (self.static_solution() if float(u.angle) == 0.0
+                   else static_state(self, float(u.angle)))
+        except ValueError:
+            sol = None
+        if sol is None:
+            return x
+        rest = np.array(sol.state, float)
+        rest[n:] = 0.0
+        return rest
+
+    def straight_layout(self, u: Inputs) -> np.ndarray:
         """At rest, the chain wrapped with straight spans (kinematics.wrapping.roller_positions)
         at driver rotation u.angle and the driven rotation that stretches both spans equally."""
         phi1 = float(u.angle)
@@ -558,7 +585,7 @@ class MultibodyModel(Model):
 
     def _settle(self) -> tuple[float, float, float]:
         """(mean, upper, lower) span tension after the chain has settled for 60 ms from the
-        initial layout with extra link damping, the driver held at 0 and no load (the
+        straight layout with extra link damping, the driver held at 0 and no load (the
         fallback of :meth:`static_tension` where the statics find no equilibrium)."""
         relax = dict(self.params)
         m, k = relax["chain.link_mass"], relax["chain.link_stiffness"]
@@ -569,7 +596,7 @@ class MultibodyModel(Model):
         model = MultibodyModel(self.drive, relax)
         from ..integrate import Verlet
         u = Inputs(0.0, 0.0, 0.0)
-        st = Verlet(model, 0.0, None, u)
+        st = Verlet(model, 0.0, model.straight_layout(u), u)
         up, low = [], []
         for i in range(1, 61):
             out = st.advance(i * 1e-3, u)

@@ -209,10 +209,11 @@ def solve_statics(model, driver_angle: float = 0.0, load: float = 0.0, start=Non
     """Static equilibrium of ``model`` (a MultibodyModel) with the driver held at
     ``driver_angle`` and the load torque ``load`` on the driven sprocket (module docstring).
     ``start``: a full state to start from (default: the straight-span layout,
-    ``model.initial_state``). Raises ValueError if Newton does not converge."""
+    ``model.straight_layout``). Raises ValueError if Newton does not converge."""
     t0 = time.perf_counter()
     pr = _Problem(model, driver_angle, load)
-    x0 = model.initial_state(Inputs(float(driver_angle), 0.0, 0.0)) if start is None else start
+    x0 = (model.straight_layout(Inputs(float(driver_angle), 0.0, 0.0)) if start is None
+          else start)
     u = np.concatenate([[x0[1]], x0[2:pr.n]]).astype(float)
     g = abs(model.params["gravity"])
     f = pr.forces(u)
@@ -303,13 +304,13 @@ def _spans(model, q, spans):
 
 
 def sagged_layout(model, driver_angle: float = 0.0) -> np.ndarray:
-    """The straight-span layout (``model.initial_state``) with each span that is longer than
+    """The straight-span layout (``model.straight_layout``) with each span that is longer than
     its chord (links at their free length l0) sagged into the parabola of that length along
     gravity's component across the span: a chord l with n links of free length l0 > l / n
     takes the midspan sag s = sqrt(3 l (n l0 - l) / 8) (arc length of a shallow parabola,
     l + 8 s^2 / (3 l)). The start of a slack chain's Newton solve: from a straight, compressed
     span Newton would first have to buckle it."""
-    x = model.initial_state(Inputs(float(driver_angle), 0.0, 0.0))
+    x = model.straight_layout(Inputs(float(driver_angle), 0.0, 0.0))
     M = model.M
     z = x[2:2 + 2 * M].reshape(M, 2)
     model._accel(x, float(driver_angle), 0.0, 0.0, 0.0)   # the seat search _engaged reads
