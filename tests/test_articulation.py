@@ -148,7 +148,8 @@ def test_no_tooth_in_the_articulation_path(chain_name, z):
 @pytest.mark.parametrize("chain_name, z", [("08A", 9), ("16B", 6), ("10B", 11)])
 def test_cut_only_lowers_the_penetration_and_stays_a_distance(chain_name, z):
     """On a grid around a seat: the kernel's penetration is never above the straight flank's,
-    equal to it off the path's inner side below where the path meets the flank, 1-Lipschitz (a distance: no jump where the cut meets the flank), and
+    equal to it off the path's inner side below where the path meets the flank, 1-Lipschitz
+    (a distance: no jump where the cut meets the flank), and
     its normal is its gradient (the contact force derives from the penalty potential)."""
     model = _model(chain_name, z)
     p = model.drive.pitch

@@ -26,8 +26,9 @@ origin, driver C at (x_c, y_c)), sprocket rotations phi1, phi2 forward positive 
   centre (clearance R_t - R_r) over the ISO 606 seating angle, continued by straight flanks
   tangent to it (the paper's circle alone, eq 9, is kept as ``contact.seating_angle >= pi``);
   on sprockets of 11 teeth or fewer the flank is cut where a roller articulating about its
-  seated neighbour passes (:func:`articulation_cut`). Penetration delta gives the normal force F_n = max(0, k_c delta + c_c delta') on the roller
-  (towards the seat), and its reaction on the sprocket.
+  seated neighbour passes (:func:`articulation_cut`). Penetration delta gives the normal force
+  F_n = max(0, k_c delta + c_c delta') on the roller (towards the seat), and its reaction on
+  the sprocket.
 * Gravity points along -Y rotated by (theta1 - drive.inclination).
 * ``multibody.rotating_frame_forces`` adds the appendix's Q (eqs A4-A7) on seated rollers;
   off by default because the coordinates are inertial and m z'' already contains those inertia
