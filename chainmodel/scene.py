@@ -648,8 +648,8 @@ class Scene:
                          + (f"; but check the chain first: {'; '.join(odd)}" if odd else ""))
 
     def implausible_chain_values(self) -> list[str]:
-        """The chain values more than 30x above or below the nearest ISO 606 chain's of the
-        drive's pitch, as sentences (:func:`chainmodel.validity.implausible_values`, which the
+        """The chain values more than validity.IMPLAUSIBLE_RATIO times above or below the
+        nearest ISO 606 chain's of the drive's pitch, as sentences (:func:`chainmodel.validity.implausible_values`, which the
         run's warnings and the FMU log give too)."""
         from .validity import implausible_values
         return [p.text for p in implausible_values(self.drive, self.parameters)]

@@ -329,7 +329,7 @@ class Monitor:
         if self.level == 3:
             self._force_alarm = min(self._force_alarm, self.params["contact.stiffness"]
                                     * seat_clearance_limit(self.params))
-        self._half_tooth = skip_threshold(drive, self.params)
+        self._skip_limit = skip_threshold(drive, self.params)
         self._losses = LossBalance(drive, self.params) if self.level == 3 else None
         self._loss_ix = (tuple(names.index(n) for n in LOSS_OUTPUTS)
                          if self._losses is not None and names is not None
@@ -351,7 +351,7 @@ class Monitor:
             losses = self._losses.message() is not None
         s = self.stats
         force = max(s.max_contact, s.max_link, -s.min_link)
-        alarm = (s.reversed_samples > 0, abs(s.drift) > self._half_tooth,
+        alarm = (s.reversed_samples > 0, abs(s.drift) > self._skip_limit,
                  force if force > self._force_alarm else 0.0, losses)
         if alarm == self._alarm:        # nothing that could raise a new problem has changed
             return []
@@ -502,9 +502,8 @@ class Monitor:
                 out.append(Problem("damper_losses", why))
         if self.level >= 1:
             half = math.pi / d.n_driven
-            limit = skip_threshold(d, self.params)
-            slack = limit - half
-            if abs(s.drift) > limit:
+            slack = self._skip_limit - half
+            if abs(s.drift) > self._skip_limit:
                 ratio = (d.tooth_ratio + s.last_drift / (s.last_k * self.period)
                          if s.last_k else math.nan)
                 teeth = s.drift / (2 * math.pi / d.n_driven)

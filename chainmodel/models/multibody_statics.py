@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -392,7 +393,6 @@ def _condensed_modes(k, mass, keep):
     T = np.zeros((k.shape[0], keep.size))
     T[keep, np.arange(keep.size)] = 1.0
     if drop.size:
-        import warnings
         try:
             with warnings.catch_warnings():
                 # ill-conditioned (a slack chain without gravity: rcond ~1e-25) is no stiffness
