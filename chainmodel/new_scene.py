@@ -16,6 +16,7 @@ What the file gets when not given (each written as a comment in the file):
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from pathlib import Path
@@ -35,6 +36,11 @@ def chain_length_links(n_driver: int, n_driven: int, centre_pitches: float) -> i
     length = 2 * a + (n_driver + n_driven) / 2 + ((n_driven - n_driver) / (2 * math.pi)) ** 2 / a
     links = math.ceil(length)
     return links + (links % 2)
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string (JSON's escapes are TOML's for these characters)."""
+    return json.dumps(str(text), ensure_ascii=False)
 
 
 def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torque: float,
@@ -196,8 +202,3 @@ def main(argv=None) -> int:
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
 
-
-def _toml_string(text: str) -> str:
-    """``text`` as a TOML basic string (JSON's escapes are TOML's for these characters)."""
-    import json
-    return json.dumps(str(text), ensure_ascii=False)

@@ -108,6 +108,21 @@ def test_new_scene_writes_any_name_as_a_toml_string(tmp_path, capsys):
     assert load_scene(path).name == name
 
 
+def test_new_scene_module_runs_as_a_script(tmp_path):
+    """`python -m chainmodel.new_scene` (the module's own entry point) writes the same scene
+    as `chainmodel new-scene`; its name helper was defined after the entry point and the
+    script stopped with a NameError."""
+    import subprocess
+    import sys
+    path = tmp_path / "script.toml"
+    done = subprocess.run([sys.executable, "-m", "chainmodel.new_scene", "--driver-teeth", "19",
+                           "--driven-teeth", "38", "--chain", "08B", "--speed-rpm", "300",
+                           "--load-torque", "15", "--name", 'a "b"', "-o", str(path)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert load_scene(path).name == 'a "b"'
+
+
 def test_new_scene_from_a_pitch_assumes_the_b_chain_and_refuses_an_unknown_pitch(capsys):
     code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", 17, "--driven-teeth", 34,
                              "--pitch", 19.05, "--speed-rpm", 300, "--load-torque", 60)
