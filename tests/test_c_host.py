@@ -145,10 +145,18 @@ def run_master(master, fmu_dir, fmu_vars, level, steps, step_ns=100_000, env=Non
     """Run the C master under a bare environment (``env`` only: what ``env -i`` gives), plus
     the test session's kernel cache folder (CHAINMODEL_CACHE_DIR, tests/conftest.py): without it
     the FMU's Python would compile into the user's ~/.cache, which the suite must leave as it
-    found it. No variable that helps a host find or start Python is passed."""
+    found it. No variable that helps a host find or start Python is passed.
+
+    The test session's OpenBLAS kernel choice (``OPENBLAS_*``, e.g. OPENBLAS_CORETYPE) is
+    passed too: it selects the BLAS kernels the set-up's linear algebra runs on, whose rounding
+    differs (an AMD EPYC with OPENBLAS_CORETYPE=Haswell in the environment against its own
+    auto-detected kernels: level 3's statics, and so the wrap fit and the held tension of levels
+    0-2, differ in the 10th digit and the outputs after 40 steps by 1e-8 relative). Without it
+    the comparison with fmpy in this process measures the two BLAS kernels, not the host."""
     guid, vr = fmu_vars
     cache = os.environ.get("CHAINMODEL_CACHE_DIR")
-    env = dict({"CHAINMODEL_CACHE_DIR": cache} if cache else {}, **(env or {}))
+    blas = {k: v for k, v in os.environ.items() if k.startswith("OPENBLAS_")}
+    env = dict(blas, **({"CHAINMODEL_CACHE_DIR": cache} if cache else {}), **(env or {}))
     outputs = outputs or [o.name for o in ALL_OUTPUTS]
     args = [str(master), str(fmu_dir / "binaries" / "linux64" / "ChainDrive.so"),
             (fmu_dir / "resources").as_uri(), guid, str(vr["fidelity"]), str(level),
