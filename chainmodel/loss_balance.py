@@ -10,16 +10,20 @@ once the driver has turned one revolution:
 
 * the loss: the work the input shaft does on the driver, int T_shaft w1 dt, less the work into
   the load and the driven damping, int (M + d2 w2) w2 dt, less the change of the kinetic energy
-  of the sprockets and the chain moving at the driver's pitch speed;
+  of the sprockets and the chain moving at the driver's pitch speed (positive whichever way
+  the power flows);
 * the joint friction of the same drive: every link articulates through 2 pi / z entering and
   leaving each sprocket under the tension of the span it joins, against mu T r_pin, at
-  z1 w1 / 2 pi links per second: P_f = mu r_pin z1 (1/z1 + 1/z2) w1 (T_tight + T_slack),
+  z1 |w1| / 2 pi links per second: P_f = mu r_pin z1 (1/z1 + 1/z2) |w1| (T_tight + T_slack),
   mu = ``FRICTION`` (lubricated steel on steel, the value the joint damping is sized with),
-  r_pin = d2 / 2 of the ISO 606 chain of this pitch and roller (chainmodel.chains).
+  r_pin = d2 / 2 of the ISO 606 chain of this pitch and roller (chainmodel.chains);
+* both as shares of the work the chain transmits, the larger of |input work| and |work into
+  the load|: under forward drive the input work, under an overrunning load (the load drives,
+  the input shaft brakes: input work negative) the load's.
 
 The result depends on damping no source gives when the loss exceeds ``RATIO`` times that
-friction and the excess is more than ``EXCESS`` of the input work (the input torque is then
-high by that much).
+friction and the excess is more than ``EXCESS`` of the transmitted work (the input torque is
+then off by that much).
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ __all__ = ["FRICTION", "RATIO", "EXCESS", "OUTPUTS", "pin_radius", "LossBalance"
 FRICTION = 0.1
 #: the dampers' loss against the joint friction above which the check fires
 RATIO = 2.0
-#: ... when the excess over that friction is also above this share of the input work
+#: ... when the excess over that friction is also above this share of the transmitted work
 EXCESS = 0.02
 #: the outputs the balance needs (besides the input speed and load torque)
 OUTPUTS = ("driver.angle", "driver.speed", "driven.speed", "input_shaft.torque",
@@ -47,15 +51,19 @@ OUTPUTS = ("driver.angle", "driver.speed", "driven.speed", "input_shaft.torque",
 
 def pin_radius(drive: Drive, params: Mapping[str, Any]) -> tuple[float, str] | None:
     """(d2 / 2 [m], chain name) of the ISO 606 chain of this pitch and roller diameter
-    (:func:`~chainmodel.presets.iso606_matches`, as the breaking load's; of two, the one with
-    the larger pin), or None for a pitch chainmodel.chains does not list."""
+    (:func:`~chainmodel.presets.iso606_matches`, as the breaking load's), or None for a pitch
+    chainmodel.chains does not list. Of two (10A and 10B share pitch and roller), the one whose
+    minimum tensile strength is the scene's ``chain.breaking_load``, else the larger pin."""
     from .chains import DIMENSIONS
     from .presets import iso606_matches
     sizes, _ = iso606_matches(drive.pitch, 2.0 * float(params.get("chain.roller_radius", 0.0)))
     names = [c.name for c in sizes if c.name in DIMENSIONS]
     if not names:
         return None
-    name = max(names, key=lambda n: DIMENSIONS[n].pin_diameter)
+    strength = float(params.get("chain.breaking_load", math.nan))
+    named = [n for n in names if abs(DIMENSIONS[n].size.tensile_strength - strength)
+             <= 1e-6 * strength]
+    name = named[0] if len(named) == 1 else max(names, key=lambda n: DIMENSIONS[n].pin_diameter)
     return 0.5 * DIMENSIONS[name].pin_diameter, name
 
 
@@ -91,7 +99,7 @@ class LossBalance:
         communication points."""
         if self.start_angle is None:
             self.start_angle = phi1
-        p_in, p_out, p_f = shaft * w1, (load + self.d2 * w2) * w2, w1 * (tight + slack)
+        p_in, p_out, p_f = shaft * w1, (load + self.d2 * w2) * w2, abs(w1) * (tight + slack)
         energy = self._energy(w1, w2)
         last = self.last
         self.last = (t, phi1, p_in, p_out, p_f, energy)
@@ -119,7 +127,7 @@ class LossBalance:
             self.start_angle = float(phi1[0])
         p_in = shaft * w1
         p_out = (load + self.d2 * w2) * w2
-        p_f = w1 * (tight + slack)
+        p_f = np.abs(w1) * (tight + slack)
         energy = self._energy(w1, w2)
         inside = np.abs(phi1 - self.start_angle) >= 2.0 * math.pi
         if self.last is not None:
@@ -143,14 +151,17 @@ class LossBalance:
         self.energy1 = float(energy[-1])
 
     def shares(self) -> tuple[float, float] | None:
-        """(loss, joint friction) as shares of the input work over the window, or None before
-        the window holds one revolution of the driver, without input work, or without an ISO
+        """(loss, joint friction) as shares of the transmitted work over the window (the
+        larger of |input work| and |work into the load|: module docstring), or None before the
+        window holds one revolution of the driver, without work transmitted, or without an ISO
         606 chain to size the friction."""
+        transmitted = max(abs(self.work_in), abs(self.work_out))
         if (self.window_angle is None or self.last is None or self.pin is None
-                or abs(self.last[1] - self.window_angle) < 2.0 * math.pi or not self.work_in > 0):
+                or abs(self.last[1] - self.window_angle) < 2.0 * math.pi
+                or not transmitted > 0):
             return None
         loss = self.work_in - self.work_out - (self.energy1 - self.energy0)
-        return loss / self.work_in, self.friction_factor * self.friction / self.work_in
+        return loss / transmitted, self.friction_factor * self.friction / transmitted
 
     def message(self) -> str | None:
         """The warning's sentence when the dampers' loss exceeds the joint friction (module
@@ -161,7 +172,9 @@ class LossBalance:
         loss, friction = s
         if not (loss > RATIO * friction and loss - friction > EXCESS):
             return None
-        return (f"level 3's dampers take {100 * loss:.3g} % of the input work, {loss / friction:.3g}x "
+        work = ("input work" if abs(self.work_in) >= abs(self.work_out) else
+                "work the overrunning load puts in")
+        return (f"level 3's dampers take {100 * loss:.3g} % of the {work}, {loss / friction:.3g}x "
                 f"the pin-bushing friction of this drive ({100 * friction:.3g} %: mu = {FRICTION:g}, "
                 f"ISO 606 {self.pin[1]} pin radius {1e3 * self.pin[0]:.3g} mm, the run's span "
                 f"tensions): the viscous joint dampers (chain.joint_damping, sized for a 10B chain "
