@@ -164,7 +164,7 @@ def test_three_tooth_driver_keeps_the_tooth_ratio():
     6.4 rad/s against 2.2 kinematic). On a taut chain over teeth it can wrap over it keeps the
     exact tooth ratio: at every whole driver tooth period the driven sprocket is within half a
     driven tooth, pi / 17, of 3/17 of the driver's turn. (Its 50 % polygonal speed swing still
-    makes level 3 warn: penetration and driven-speed reversal, docs/stability.md.)"""
+    makes level 3 warn: driven-speed reversal, docs/stability.md.)"""
     r = chainmodel.simulate("xu2010", fidelity=3, drive_driver_teeth=3,
                             drive_centre_distance=0.0, duration=0.8)
     assert "teeth_skipped" not in {p.code for p in r.problems}

@@ -1,7 +1,9 @@
 """Where a result is valid (issue 21 item 5; chainmodel.validity).
 
-The issue's cases: level 3 under 14x its load warns (link force above the breaking load,
-penetration far beyond the seat clearance); a slack chain under a heavy load skips teeth and is
+The issue's cases: level 3 under 14x its load warns (link force above the breaking load; its
+contact overlap, mostly the joint's deformation in seed 003's equivalent contact stiffness, is
+not a roller penetrating its seat: the roller's own Hertz approach is checked against ISO 606's
+seat clearance here); a slack chain under a heavy load skips teeth and is
 not valid (the CLI exits 3); a chain 35 links too long warns at levels 0-1
 (level 2 refuses it, level 3's divergence names the chain's length); xu2010 at 120 rpm stays
 quiet at every level. Thresholds come from ISO 606 (tensile strengths, joint and seat
@@ -18,13 +20,14 @@ import numpy as np
 import pytest
 
 import chainmodel
+from chainmodel import chains
+from chainmodel.new_scene import scene_text
 from chainmodel.analysis.trade_study import SCENES
 from chainmodel.cli import main
 from chainmodel.geometry import Drive
 from chainmodel.models import ALL_OUTPUTS, SimulationDiverged
 from chainmodel.scene import load_scene
-from chainmodel.validity import (Monitor, breaking_load, geometry_problems, output_problems,
-                                 seat_clearance_limit)
+from chainmodel.validity import Monitor, breaking_load, geometry_problems, output_problems
 
 # ISO 606 (simplex chains), minimum tensile strength [N]
 ISO_10A, ISO_10B = 21.8e3, 22.2e3
@@ -61,11 +64,15 @@ def overload():
 
 def test_overload_warns_at_level_3(overload):
     """xu2010 under 600 N m, 14x its rated load: link tensions above the 10B chain's breaking
-    load and penetrations beyond the seat clearance, warned. (The issue's case, the trade
-    study's coarse 6/9-tooth scene, ran there only because of level 3's straight flanks on
-    small sprockets; it runs within its validity now: tests/test_articulation.py.)"""
+    load, warned. (The issue's case, the trade study's coarse 6/9-tooth scene, ran there only
+    because of level 3's straight flanks on small sprockets; it runs within its validity now:
+    tests/test_articulation.py.) The contact overlap F / k_c passes ISO 606's largest seat
+    clearance there, as it does at 6-9 % of the breaking load on every ordinary drive: it is
+    the joint's deformation in seed 003's equivalent stiffness (its section 5), not a
+    penetration (test_no_roller_penetrates_its_seat_before_the_breaking_load), and is not
+    warned; a warning, not a refusal, while it stays below the roller radius."""
     found = codes(overload.problems)
-    assert {"breaking_load", "penetration"} <= found
+    assert "breaking_load" in found and "penetration" not in found
     # the thresholds, from ISO 606 and seed 003's contact stiffness typed here
     peak_link = float(np.max(overload["chain.max_link_tension"]))
     peak = float(np.max(overload["contact.max_force"]))
@@ -75,9 +82,54 @@ def test_overload_warns_at_level_3(overload):
     # the scene's chain is 10B (seed 003), whose breaking load the parameter carries
     assert "breaking load" in text and "chain.breaking_load" in text and "22.2 kN" in text
     assert "a larger chain" in text          # says what to change
-    # a warning, not a refusal, while the penetration stays below the roller radius (the
-    # roller centre outside the tooth); beyond it the result is refused (not valid)
+    # the roller centre outside the tooth: below the roller radius, so not refused
     assert peak / K_CONTACT < D1_10B / 2 and overload.valid
+
+
+#: ISO 606 simplex chains: roller diameter d1, inner width b1 (the roller's length) [mm],
+#: minimum tensile strength [kN]
+ISO_ROLLERS = {"08A": (7.92, 7.85, 13.9), "08B": (8.51, 7.75, 17.8), "10A": (10.16, 9.40, 21.8),
+               "10B": (10.16, 9.65, 22.2), "12A": (11.91, 12.57, 31.3),
+               "12B": (12.07, 11.68, 28.9), "16A": (15.88, 15.75, 55.6),
+               "16B": (15.88, 17.02, 60.0)}
+
+
+@pytest.mark.parametrize("name", sorted(ISO_ROLLERS))
+def test_no_roller_penetrates_its_seat_before_the_breaking_load(name):
+    """Why the contact overlap is not compared with the seat clearance: a roller in an ISO
+    606 seat (r_i min = 0.505 d1) pressed by the chain's whole breaking load approaches it by
+    less than a fifth of the largest seat clearance (Hertz, two cylinders in line contact of
+    one steel, E = 210 GPa, nu = 0.3: Johnson, Contact Mechanics, 1985, eq 5.39 with the
+    concave seat's radius, written here), while the model's overlap F / k_c passes that
+    clearance at under a tenth of the breaking load - a working load."""
+    d1, b1, fu = ISO_ROLLERS[name]
+    d1, b1, fu = d1 * 1e-3, b1 * 1e-3, fu * 1e3
+    r, rs = d1 / 2, 0.505 * d1
+    e, nu = 210e9, 0.3
+    line = fu / b1
+    r_rel = 1.0 / (1.0 / r - 1.0 / rs)
+    half_width = math.sqrt(4.0 * line * r_rel * 2.0 * (1.0 - nu * nu) / (math.pi * e))
+    approach = line * (1.0 - nu * nu) / (math.pi * e) * (
+        2.0 * math.log(4.0 * r / half_width) - 1.0 + 2.0 * math.log(4.0 * rs / half_width) - 1.0)
+    clearance = (0.505 * d1 * 1e3 + 0.069 * (d1 * 1e3) ** (1 / 3)) * 1e-3 - r
+    assert 0.0 < approach < 0.2 * clearance
+    kc = chains.parameter_values(name)["contact.stiffness"]
+    assert kc * clearance < 0.1 * fu
+
+
+def test_rated_16a_drive_is_quiet_at_level_3(tmp_path):
+    """The audit's false alarm: a 16A 15/45 drive at 100 rpm carrying 4 kW (its rating in the
+    usual tables; about 7 % of its breaking load in the tight span) - contact forces above
+    k_c times the seat clearance, no warning."""
+    path = tmp_path / "rated16a.toml"
+    path.write_text(scene_text(
+        driver_teeth=15, driven_teeth=45, chain="16A", speed_rpm=100.0,
+        load_torque=4000.0 / (100.0 * 2 * math.pi / 60.0) * 3.0))
+    r = chainmodel.simulate(path, fidelity=3, duration=0.6, ramp_time=0.3)
+    kc = chains.parameter_values("16A")["contact.stiffness"]
+    clearance = (0.505 * 15.88 + 0.069 * 15.88 ** (1 / 3)) * 1e-3 - 15.88e-3 / 2
+    assert float(np.max(r["contact.max_force"])) > kc * clearance
+    assert r.problems == [] and r.valid
 
 
 #: a chain two links too long for xu2010's centre distance, no pretension, 200 N m: it hangs
@@ -181,6 +233,15 @@ def test_every_preset_scene_has_a_chain_that_fits():
         assert geometry_problems(sc.drive, sc.parameters) == [], spec.name
 
 
+def test_level_3_does_not_carry_levels_0_2s_wrap_option():
+    """torsional.wrap_statics is levels 0-2's option: on C3, whose wrap it cannot fit, levels
+    0-2 say so and level 3 (its own statics) does not (a level-3 result carried the warning)."""
+    sc = load_scene("C3", fidelity=1)
+    sc.model()
+    assert "wrap_statics_unavailable" in codes(geometry_problems(sc.drive, sc.parameters, 1))
+    assert geometry_problems(sc.drive, sc.parameters, 3) == []
+
+
 # --- thresholds from ISO 606 -----------------------------------------------------------------
 
 def test_breaking_load_from_the_parameter_or_iso_606():
@@ -196,13 +257,6 @@ def test_breaking_load_from_the_parameter_or_iso_606():
     assert breaking_load(d08, dict(params, **{"chain.roller_radius": 8.51e-3 / 2}))[0] == ISO_08B
     d10 = Drive(25, 17, 0.010, 20, 0.5)
     assert breaking_load(d10, params) is None                  # no ISO 606 chain of 10 mm pitch
-
-
-def test_seat_clearance_limit_is_iso_606s_largest():
-    params = load_scene("xu2010").parameters
-    assert seat_clearance_limit(params) == pytest.approx(SEAT_CLEARANCE_MAX_10B, rel=1e-12)
-    wide = dict(params, **{"contact.seat_radius": params["chain.roller_radius"] + 1e-3})
-    assert seat_clearance_limit(wide) == pytest.approx(1e-3)
 
 
 # --- the monitors on signals built here ------------------------------------------------------
@@ -250,6 +304,31 @@ def test_teeth_skipped_is_half_a_driven_tooth_and_the_slack_at_whole_periods():
     assert _check(_signals(te=lambda a: -tooth * (a > 4.5 * p1)), level=1) == {"teeth_skipped"}
 
 
+def test_a_driver_rocking_back_to_its_start_is_no_tooth_period():
+    """A driver that rocks back past its start angle and returns (a load applied at rest)
+    crosses its start again: no tooth period has passed there, and the transmission error is
+    the spans' elastic take-up of the load, not a skip (the FMU logged "teeth skipped ... over
+    0 whole driver tooth periods ... nan" at t = 5 ms on such a start)."""
+    p1 = 2 * math.pi / 25
+    tooth = 2 * math.pi / 17
+    t = np.linspace(0.0, 10.0, 4001)
+    phi1 = np.where(t < 1.0, -0.5 * p1 * np.sin(math.pi * t), 0.5 * (t - 1.0) * p1)
+    # the take-up while it rocks, released as it turns on
+    te = np.where((t > 0.5) & (t < 1.2), -0.8 * tooth, 0.0)
+    out = {"driver.angle": phi1, "driven.angle": 25 / 17 * phi1 + te, "transmission_error": te,
+           "driven.speed": np.full_like(t, 0.5), "driver.speed": np.full_like(t, 0.3),
+           "input_shaft.torque": np.zeros_like(t), "tight_span.tension": np.full_like(t, 500.0),
+           "slack_span.tension": np.full_like(t, 100.0), "contact.max_force": np.full_like(t, 10.0),
+           "chain.max_link_tension": np.full_like(t, 500.0),
+           "chain.min_link_tension": np.full_like(t, 100.0)}
+    sc = load_scene("xu2010", fidelity=3)
+    assert codes(output_problems(sc.drive, sc.parameters, 3, t, out, 1.0)) == set()
+    # the same offset arriving between two whole tooth periods is a skip
+    te2 = np.where(t < 3.0, 0.0, -0.8 * tooth)
+    out2 = dict(out, transmission_error=te2)
+    assert codes(output_problems(sc.drive, sc.parameters, 3, t, out2, 1.0)) == {"teeth_skipped"}
+
+
 def test_reversal_counts_once_the_driver_has_turned_a_tooth():
     p1 = 2 * math.pi / 25
     back_early = _signals(driven_speed=lambda a: np.where(a < 0.5 * p1, -5.0, 1.47))
@@ -266,11 +345,14 @@ def test_force_thresholds():
     out["chain.min_link_tension"] = np.full_like(t, -1.01 * ISO_10B)    # compression (xu2010: chain.breaking_load, 10B)
     assert _check((t, out)) == {"breaking_load"}
     t, out = _signals()
-    out["contact.max_force"] = np.full_like(t, 1.01 * K_CONTACT * SEAT_CLEARANCE_MAX_10B)
-    assert _check((t, out)) == {"penetration"}
-    assert _check((t, out), level=1) == set()      # penetration is level 3's penalty law
-    out["contact.max_force"] = np.full_like(t, 0.99 * K_CONTACT * SEAT_CLEARANCE_MAX_10B)
+    # the overlap past the seat clearance: the joint's deformation, not warned
+    out["contact.max_force"] = np.full_like(t, 1.5 * K_CONTACT * SEAT_CLEARANCE_MAX_10B)
     assert _check((t, out)) == set()
+    # past the roller radius: the model's roller centre inside the tooth, refused (and the
+    # force, 43 kN, above the breaking load too)
+    out["contact.max_force"] = np.full_like(t, 1.01 * K_CONTACT * D1_10B / 2)
+    assert _check((t, out)) == {"penetration_roller", "breaking_load"}
+    assert _check((t, out), level=1) == {"breaking_load"}     # the overlap is level 3's law
 
 
 def test_sample_by_sample_equals_whole_arrays(skipping):
@@ -377,6 +459,38 @@ def test_damper_losses_against_joint_friction_on_signals():
     # a tension five times as high: the friction too, and 3x the old loss is within it
     t, out = _balance_signals(extra(3.0), tight=5 * tight, slack=5 * slack)
     assert codes(output_problems(sc.drive, sc.parameters, 3, t, out, w1, load)) == set()
+
+
+def test_damper_losses_reverse_and_overrunning_on_signals():
+    """The friction is the articulation's, whichever way the chain runs: in reverse (driver
+    and load both reversed) the check answers as forward (it fired on every reversed run when
+    the friction took the signed speed and came out negative); under an overrunning load (the
+    load drives, the input shaft brakes: input work negative) the loss is a share of the work
+    the load puts in, and 3x the friction fires (the check was skipped there)."""
+    sc = load_scene("xu2010", fidelity=3, driven_damping=0.0)
+    z1, z2, load, w1, tight, slack = 25, 17, 40.0, 12.0, 1100.0, 100.0
+    friction = MU * D2_10B / 2 * z1 * (1 / z1 + 1 / z2) * w1 * (tight + slack) / (
+        load * z1 / z2 * w1)
+
+    def check(out, t, speed, torque):
+        return codes(output_problems(sc.drive, sc.parameters, 3, t, out, speed, torque))
+
+    for ratio, fires in ((1.5, False), (3.0, True)):
+        extra = ratio * friction / (1 - ratio * friction)
+        t, out = _balance_signals(extra)
+        forward = check(out, t, w1, load)
+        assert forward == ({"damper_losses"} if fires else set())
+        # reverse: every angle, speed and torque mirrored, the tensions as they were
+        rev = dict(out)
+        for name in ("driver.angle", "driver.speed", "driven.speed", "input_shaft.torque"):
+            rev[name] = -out[name]
+        assert check(rev, t, -w1, -load) == forward
+        # overrunning: the load drives the driven sprocket forward (load torque negative) and
+        # the input shaft takes the load's power less the share ``ratio`` x friction lost
+        over = dict(out)
+        lost = ratio * friction
+        over["input_shaft.torque"] = np.full_like(t, -load * z1 / z2 * (1 - lost))
+        assert check(over, t, w1, -load) == forward
 
 
 def test_08a_at_1500_rpm_warns_and_the_joint_dampers_are_the_cause(tmp_path):
