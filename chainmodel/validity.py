@@ -147,6 +147,8 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
     if drive.links is None:
         return odd
     length = _length_problems(drive, params)
+    if level == 3 and length and length[0].code == "chain_too_long":
+        length = [_level3_start(drive, params, length[0])]
     # the option is levels 0-2's: level 3 holds its own statics and says nothing of it
     wrap = [] if level == 3 else _wrap_statics_problems(drive, params, level)
     if length and wrap and wrap[0].code == "wrap_statics_unavailable":
@@ -194,9 +196,11 @@ def _unit(name: str) -> str:
 
 def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
                            level: int | None) -> list[Problem]:
-    from .models.wrap_statics import fallbacks, slack_shortfall, unavailable
+    from .models.wrap_statics import fallbacks, slack_shortfall, span_ends, unavailable
     if not params.get("torsional.wrap_statics"):
         return []
+    if level in (0, 1, 2):
+        span_ends(drive, params)    # the fit or its refusal recorded, as the level's build does
     why = unavailable(drive, params)
     if why is None:
         found = [Problem("wrap_statics_fallback", f"torsional.wrap_statics: {note}")
@@ -234,6 +238,26 @@ def _length_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
             f"its joints' play ({M} x chain.joint_clearance = {1e3 * play:.3g} mm): every link "
             f"is stretched at rest; {_what_fits(drive, params, lmin, lmax, longest=False)}"))]
     return []
+
+
+def _level3_start(drive: Drive, params: Mapping[str, Any], problem: Problem) -> Problem:
+    """Level 3 starts a chain too long from its static equilibrium, hanging in its sag
+    (MultibodyModel.initial_state); where its statics find none (their Newton solve of a deep
+    sag can stall), from straight spans, whose links then start in compression: the chain
+    too long warning says so, so that the forces of the start-up are not read as the load's
+    (the breaking-load warning that follows would say "use a lower load")."""
+    from .models.multibody import MultibodyModel
+    from .parameters import BY_NAME
+    # the run's own static solution (cached per drive and parameters: no second solve)
+    if MultibodyModel(drive, {k: v for k, v in params.items() if k in BY_NAME}
+                      ).static_solution() is not None:
+        return problem
+    return Problem(problem.code, (
+        f"{problem.message}. Level 3's statics find no equilibrium for this chain (their Newton "
+        f"solve does not converge), so level 3 starts it from straight spans with its "
+        f"slack links in compression: the forces of the first milliseconds (link or contact "
+        f"forces above the breaking load, a reversing driven sprocket) are that start's, not "
+        f"the load's"))
 
 
 @lru_cache(maxsize=64)

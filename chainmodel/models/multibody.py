@@ -288,7 +288,7 @@ class MultibodyModel(Model):
         from .multibody_statics import static_state
         try:
             sol = (self.static_solution() if float(u.angle) == 0.0
-                   else static_state(self, float(u.angle)))
+                   else static_state(self, float(u.angle), long_solve=True))
         except ValueError:
             sol = None
         if sol is None:
@@ -575,7 +575,7 @@ class MultibodyModel(Model):
                 _STATIC_CACHE.clear()
             from .multibody_statics import static_state
             try:
-                sol = static_state(self)
+                sol = static_state(self, long_solve=True)
                 _STATIC_CACHE[key] = (sol.mean_tension, sol.tension_upper, sol.tension_lower,
                                       sol)
             except ValueError:

@@ -374,14 +374,31 @@ def sagged_layout(model, driver_angle: float = 0.0) -> np.ndarray:
     return x
 
 
-def static_state(model, driver_angle: float = 0.0, load: float = 0.0) -> StaticSolution:
+#: Newton steps of :func:`static_state`'s last try
+LONG_SOLVE = 800
+
+
+def static_state(model, driver_angle: float = 0.0, load: float = 0.0,
+                 long_solve: bool = False) -> StaticSolution:
     """:func:`solve_statics` from :func:`sagged_layout` (the straight-span layout where the
     spans are not longer than their chords), or, if that fails, from the straight-span
-    layout."""
+    layout; if that fails too and ``long_solve``, from the sagged layout again with
+    ``LONG_SOLVE`` Newton steps (a deep sag can take a few more than the default 200: a 12B
+    17/34 chain two links too long converged in 202, so level 3 had started it from straight
+    spans in compression). Level 3's own start and static tension take the long solve
+    (MultibodyModel); levels 0-2's fits do not (a chain that hangs that deep is beyond their
+    straight spans, and they keep the seat ladder there)."""
+    sagged = sagged_layout(model, driver_angle)
     try:
-        return solve_statics(model, driver_angle, load, start=sagged_layout(model, driver_angle))
+        return solve_statics(model, driver_angle, load, start=sagged)
     except ValueError:
+        pass
+    try:
         return solve_statics(model, driver_angle, load)
+    except ValueError:
+        if not long_solve:
+            raise
+        return solve_statics(model, driver_angle, load, start=sagged, max_iter=LONG_SOLVE)
 
 
 def _condensed_modes(k, mass, keep):
