@@ -234,6 +234,16 @@ def test_a_steady_window_shorter_than_a_tooth_period_is_warned_not_a_silent_nan(
     assert longer.summary()["tooth_ratio"] == pytest.approx(25 / 17, rel=1e-3)   # z1 / z2
 
 
+def test_a_drive_held_at_rest_is_not_asked_for_a_longer_run():
+    """Input speed 0 (a drive held at rest): no tooth period exists; the summary says so
+    instead of asking for a run of ~1e13 s (an audit found "run for at least 4.71e+13 s": the
+    driver's residual vibration taken for a running speed)."""
+    r = chainmodel.simulate("xu2010", input_speed_rpm=0.0, duration=0.1, fidelity=1)
+    assert math.isnan(r.summary()["tooth_ratio"])
+    assert not any("run for at least" in w for w in r.warnings)
+    assert any("held at rest" in w for w in r.warnings)
+
+
 def test_a_chain_value_far_from_its_iso_chain_is_questioned():
     """A link mass typed in grams (16.2 'kg' at 15.875 mm, whose ISO 606 chains 10A / 10B have
     0.0206 / 0.0177 kg per link, chainmodel.chains): the speed refusal it causes names it, and a
