@@ -554,8 +554,10 @@ class Verlet(FixedStepper):
 
     def __init__(self, model: Model, *args, **kwargs):
         if not model.second_order:
+            why = getattr(model, "first_order_states", "")
             raise ValueError(f"the verlet stepper needs a second-order model (state [q, v]); "
-                             f"the {model.name} model is not; use rk4 or an adaptive method")
+                             f"the {model.name} model is not{why}; use rk4 or an adaptive "
+                             f"method")
         super().__init__(model, *args, **kwargs)
 
 

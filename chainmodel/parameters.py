@@ -254,6 +254,14 @@ PARAMETERS: tuple[Parameter, ...] = (
        "stays continuous through seating and release as in the multibody model; off, the "
        "current count makes the tension step by T / n at each event (docs/reduced_models.md)",
        kind=bool, levels=(1, 2)),
+    _p("torsional.sag_lag", True, "",
+       "under gravity, levels 0-1 carry each straight span's sag (the elastic catenary, "
+       "S = w_n^2 L^3 / 24): level 0 quasi-statically, level 1 through a state per span that "
+       "follows the span's stretch at its first string frequency, so a slack span under load "
+       "hangs on its sag as in level 3 while the torsional mode above the string modes sees "
+       "the spans elastic (docs/reduced_models.md, \"Level 1's lagged sag\"); off: no sag "
+       "term with torsional.wrap_statics, the quasi-static sag on the seat ladder",
+       kind=bool, levels=(0, 1)),
     # level 2
     _p("modal.modes", 1, "", "transverse Galerkin modes per span (seed 004 eq 57)",
        kind=int, minimum=1, maximum=20, levels=(2,)),

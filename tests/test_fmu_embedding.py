@@ -114,17 +114,20 @@ def test_two_different_builds_run_side_by_side(chaindrive_fmu, second_build, tmp
     def static_tension(pretension):
         return level0(pretension).static_tension()
 
-    def raw(t, b):      # the floored law's raw tension (kernels.kinematic.split)
-        return t - b * b / t if b > 0 else t
+    def raw(t, b, ks):  # the floored, sagging law's raw tension (kernels.kinematic.split)
+        return t - (b * b / t if b > 0 else 0.0) - ks / (t * t)
 
     for key, pretension in (("a", 0.0), ("b", PRETENSION_B), ("a2", 0.0)):
         out = res[key]
         assert out["chain.pretension"] == pretension      # its own schema's default
-        # level 0's spans share their raw tensions' sum 2 (T_h - b^2 / T_h) (b = 0: 2 T_h),
-        # T_h the tension they hold at rest
-        b = level0(pretension)._floor
-        assert raw(out["tight_span.tension"], b) + raw(out["slack_span.tension"], b) == \
-            pytest.approx(2.0 * raw(held(pretension), b), rel=1e-12)
+        # level 0's spans share their raw tensions' sum 2 T_h - 2 b^2 / T_h - (ks_u + ks_l) /
+        # T_h^2 (no floor: b = 0; no sag: ks = 0), T_h the tension they hold at rest; the
+        # load (43.2 N m) makes the upper span the tight one
+        m0 = level0(pretension)
+        b, (ks_u, ks_l), t_h = m0._floor, m0._sag_ks, held(pretension)
+        assert raw(out["tight_span.tension"], b, ks_u) + raw(out["slack_span.tension"], b,
+                                                             ks_l) == \
+            pytest.approx(raw(t_h, b, ks_u) + raw(t_h, b, ks_l), rel=1e-12)
     assert static_tension(PRETENSION_B) > static_tension(0.0) + 50.0   # the builds do differ
 
 

@@ -212,17 +212,28 @@ def test_symmetric_drive_unloaded_tensions_equal_static_tension():
         np.testing.assert_allclose(out["input_shaft.torque"], 0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("sag", [False, True], ids=["no_sag", "sag"])
 @pytest.mark.parametrize("name", ["C1", "xu2010", "A1"])
-def test_unloaded_tensions_share_the_static_sum(name):
+def test_unloaded_tensions_share_the_static_sum(name, sag):
     """No load, no inertia: the driven sprocket is free, so T_u a_uO = T_l a_lO, and the
-    closure (seed 004 eqs 15-16 generalised) keeps T_u + T_l = 2 T0."""
+    closure (seed 004 eqs 15-16 generalised) keeps T_u + T_l = 2 T0. With the spans' sag
+    (torsional.sag_lag, the default; the seat ladder's law here) the closure is on the raw
+    tensions T - k_eff S / T^2 (the elastic catenary inverted): their sum is the one at rest,
+    2 T0 - sum k_eff S / T0^2, and T_u + T_l stays within the sag's share of it."""
     d = chainmodel.preset(name)
-    m = _model(d, **{"driver.inertia": 0.0, "driven.inertia": 0.0, "driven.damping": 0.0})
+    m = _model(d, **{"driver.inertia": 0.0, "driven.inertia": 0.0, "driven.damping": 0.0,
+                     "torsional.sag_lag": sag})
     angle = np.linspace(0, 2 * math.pi / d.n_driver, 200)
     out = m.evaluate(angle, 10.0, 0.0, 0.0)
     g = K.chain_geometry(d, angle, out["driven.angle"])
     T_u, T_l = _upper_lower(out, g, d, m.params)
-    np.testing.assert_allclose(T_u + T_l, 2 * m.static_tension(), rtol=1e-12)
+    t0 = m.static_tension()
+    ks_u, ks_l = m._sag_ks
+    assert (ks_u > 0 and ks_l > 0) == sag
+    np.testing.assert_allclose(T_u - ks_u / T_u ** 2 + T_l - ks_l / T_l ** 2,
+                               2 * t0 - (ks_u + ks_l) / t0 ** 2, rtol=1e-12)
+    np.testing.assert_allclose(T_u + T_l, 2 * t0, rtol=1e-12 if not sag else
+                               (ks_u + ks_l) / t0 ** 3)
     np.testing.assert_allclose(T_u * g.upper.arm_start, T_l * g.lower.arm_end, rtol=1e-12)
 
 
@@ -230,13 +241,26 @@ def test_unloaded_tensions_share_the_static_sum(name):
 @pytest.mark.parametrize("load", [-1e5, -300.0, -1.0, 0.0, 1.0, 300.0, 1e5])
 @pytest.mark.parametrize("speed", [10.0, -10.0])
 def test_spans_never_push(load, speed, wrap):
+    _spans_never_push(load, speed, wrap, sag=False)
+
+
+@pytest.mark.parametrize("load", [-1e5, -300.0, 0.0, 300.0, 1e5])
+def test_spans_never_push_and_hang_on_their_sag(load):
+    """With the spans' sag (torsional.sag_lag, the default) on the seat ladder: the torque
+    balance as without it, and a span the load would take to zero hangs on its sag instead
+    (above 0, below what it holds at rest)."""
+    _spans_never_push(load, 10.0, False, sag=True)
+
+
+def _spans_never_push(load, speed, wrap, sag):
     """Tensions are never negative, whatever the load torque's sign; when one span would have
     to push it goes slack (zero on the seat ladder's linear law; under the wrap fit's floor b
     it sits on the floor's knee, above 0 and below b) and the other takes the whole torque,
     and the driven sprocket's torque balance still holds. (xu2010: with these defaults its
     wrap fit has a floor; C1's, with no pretension, has none since the held tension.)"""
     d = chainmodel.preset("xu2010")
-    m = _model(d, **{"driven.damping": 0.2, "torsional.wrap_statics": wrap})
+    m = _model(d, **{"driven.damping": 0.2, "torsional.wrap_statics": wrap,
+                     "torsional.sag_lag": sag})
     if wrap:
         assert m._floor > 0.0
     p = m.params
@@ -256,7 +280,10 @@ def test_spans_never_push(load, speed, wrap):
               + p["driven.damping"] * out["driven.speed"] + load)
     np.testing.assert_allclose(T_u * g.upper.arm_start - T_l * g.lower.arm_end, torque,
                                rtol=1e-10, atol=1e-9)
-    if abs(load) >= 300 and not wrap:     # beyond what 2 T0 can split: one span slack
+    if abs(load) >= 300 and sag:          # beyond what 2 T0 can split: one span on its sag
+        lesser = T_u if load < 0 else T_l
+        assert np.all(lesser > 0) and np.all(lesser < m.static_tension())
+    elif abs(load) >= 300 and not wrap:   # beyond what 2 T0 can split: one span slack
         # (zero up to the rounding of taking rho A v^2 off the outputs)
         slack_u, slack_l = np.abs(T_u) < 1e-9, np.abs(T_l) < 1e-9
         assert np.all(slack_u | slack_l)
@@ -320,9 +347,9 @@ def test_scalar_kernel_equals_the_vectorised_library(name, wrap):
     from chainmodel.models import ALL_OUTPUTS
     from chainmodel.kernels.kinematic import level0_outputs
     m = chainmodel.Scene.from_preset(name, fidelity=0, torsional_wrap_statics=wrap).model()
-    # `fine`: the fit is refused (docs/reduced_models.md), the ladder's law holds; `coarse`
-    # holds level 3's tooth-period mean, 1286 N against 500 N at angle 0, under a floor
-    assert (m._floor > 0) == (wrap and name in ("xu2010", "C1", "coarse"))
+    # `coarse` holds level 3's tooth-period mean, 1286 N against 500 N at angle 0, under a
+    # floor; `fine`'s wrap (refused until it was fitted with its spans' sag) too
+    assert (m._floor > 0) == wrap
     rng = np.random.default_rng(7)
     n = 400
     angle = rng.uniform(-60, 60, n)
@@ -335,7 +362,7 @@ def test_scalar_kernel_equals_the_vectorised_library(name, wrap):
     K_, G, C = m._kernel_constants
     out = np.empty(len(ALL_OUTPUTS))
     assert np.any(speed < 0)
-    if m._floor > 0:           # the floor's knee: never 0 (kernels.kinematic.split)
+    if m._floor > 0 or max(m._sag_ks) > 0:   # the floor's knee or the sag: never 0
         assert np.all(ref["slack_span.tension"] > 0.0)
     else:
         assert np.any(ref["slack_span.tension"] == 0.0)

@@ -41,7 +41,8 @@ def _level1_modes(**overrides):
     w = np.sqrt(np.abs(lam.real))
     v = np.real(vec)
     energy = np.einsum("ij,ik,jk->k", mass, v, v)
-    share = mass[1, 1] * v[1] ** 2 / energy if m.n_states == 4 else np.ones_like(w)
+    share = (mass[1, 1] * v[1] ** 2 / energy if m.n_sprocket_states == 4
+             else np.ones_like(w))
     return w / (2 * math.pi), share
 
 
@@ -148,7 +149,7 @@ def _string_detuning(name: str, rpm: float, tension: float) -> float:
 def test_level1_misses_its_criteria_only_on_string_resonances(name, rpm, span, resonant,
                                                                criterion):
     """Issue 10's criteria for level 1 (slack span within 6 % of level 3 at 30-60 rpm on
-    xu2010, assumed away from span resonance; tight span within 3 % everywhere) fail only where
+    xu2010, assumed away from span resonance; tight span within 3 % everywhere) may fail only where
     a meshing harmonic sits within 7 % of the span's string modes at level 3's running tension:
     xu2010's slack span at 30 rpm (twice the meshing on mode 1) and 60 rpm (the meshing on
     mode 1), C1's tight span at 60 rpm (twice the meshing on mode 1). Level 3's spans bow
@@ -161,7 +162,9 @@ def test_level1_misses_its_criteria_only_on_string_resonances(name, rpm, span, r
     detuning = _string_detuning(name, rpm, level3)
     error = abs(level1 / level3 - 1.0)
     if resonant:
-        assert detuning < 0.07 and error > criterion, (detuning, error)
+        # may miss (60 rpm: 14 %; C1: 4.9 %), within a few times the criterion; with the
+        # lagged sag xu2010's slack span at 30 rpm meets it (5.7 %, was 7.5 %)
+        assert detuning < 0.07 and error < 3.0 * criterion, (detuning, error)
     else:
         assert detuning > 0.15 and error <= criterion, (detuning, error)
 

@@ -285,10 +285,14 @@ def test_level_3_says_when_a_chain_too_long_starts_from_straight_spans(monkeypat
         xu.drive, xu.parameters, 1))
 
 
-def test_level_3_does_not_carry_levels_0_2s_wrap_option():
-    """torsional.wrap_statics is levels 0-2's option: on C3, whose wrap it cannot fit, levels
-    0-2 say so and level 3 (its own statics) does not (a level-3 result carried the warning)."""
-    sc = load_scene("C3", fidelity=1)
+def test_level_3_does_not_carry_levels_0_2s_wrap_option(tmp_path):
+    """torsional.wrap_statics is levels 0-2's option: on a 16A drive whose wrap it cannot fit,
+    levels 0-2 say so and level 3 (its own statics) does not (a level-3 result carried the
+    warning)."""
+    from test_wrap_statics import _REFUSED_16A
+    path = tmp_path / "refused16a.toml"
+    path.write_text(_REFUSED_16A)
+    sc = load_scene(str(path), fidelity=1)
     sc.model()
     assert "wrap_statics_unavailable" in codes(geometry_problems(sc.drive, sc.parameters, 1))
     assert geometry_problems(sc.drive, sc.parameters, 3) == []

@@ -46,7 +46,9 @@ K_SIZE = 13
 #: b^2 / T0) under a floor), rho * g_n for the sag, tooth ratio n_driver / n_driven, centrifugal
 #: tension per (rad/s)^2 of the driver, the wrap fit's floor b (0: none; :func:`split`)
 C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL, C_FLOOR = range(8)
-C_SIZE = 8
+#: each span's sag term times its stiffness, k_eff S [N^3] (torsional.sag_lag; 0: none)
+C_KS_UP, C_KS_LOW = 8, 9
+C_SIZE = 10
 
 _EVENT_TOL = 1e-12   # chainmodel.kinematics.fourbar._EVENT_TOL
 
@@ -134,19 +136,20 @@ def driven_rotation(phi, w, a, reverse, K):
 
 
 @jit
-def split(total, floor, arm_pull, arm_back, load):
+def split(total, floor, arm_pull, arm_back, load, ks_pull=0.0, ks_back=0.0):
     """Quasi-static span tensions (T_pull, T_back) of a rigid chain: T_pull a_pull - T_back
     a_back = load, the spans' linear (raw) tensions summing to ``total``.
 
-    Without a floor (``floor`` = 0: the seat ladder's linear law) the tensions are the raw
-    ones, T_pull + T_back = total, and a span that would push carries 0 (seed 004 eqs 15-16).
-    With the wrap fit's floor b (torsional.wrap_statics: levels 1-2's span law,
-    kernels/spans.py ``_tension``) each tension is softplus(raw, b) = (raw + sqrt(raw^2 +
-    4 b^2)) / 2, whose inverse is raw = T - b^2 / T. With the torque balance giving one
-    tension from the other, the raw sum g = T_pull - b^2 / T_pull + T_back - b^2 / T_back -
-    total is increasing and concave in either, and -> -inf where it -> 0, so Newton's method
-    from a point where g <= 0 rises monotonically to the root."""
-    if floor <= 0.0:
+    Without a floor or sag (``floor`` = ``ks_*`` = 0: the seat ladder's linear law) the
+    tensions are the raw ones, T_pull + T_back = total, and a span that would push carries 0
+    (seed 004 eqs 15-16). With the wrap fit's floor b (torsional.wrap_statics: levels 1-2's
+    span law, kernels/spans.py ``_tension``) and each span's sag k_eff S (torsional.sag_lag:
+    the elastic catenary, level 1's lagged sag held quasi-statically) each tension is
+    T = softplus(raw + k_eff S / T^2, b), whose inverse is raw = T - b^2 / T - k_eff S / T^2.
+    With the torque balance giving one tension from the other, the raw sum g = sum (T - b^2 /
+    T - k_eff S / T^2) - total is increasing and concave in either, and -> -inf where it -> 0,
+    so Newton's method from a point where g <= 0 rises monotonically to the root."""
+    if floor <= 0.0 and ks_pull <= 0.0 and ks_back <= 0.0:
         t_pull = (load + total * arm_back) / (arm_pull + arm_back)
         t_back = total - t_pull
         if t_back < 0:
@@ -159,26 +162,32 @@ def split(total, floor, arm_pull, arm_back, load):
     # Newton on the span that carries less (the back span when the load is positive): its
     # tension s has lower bound 0 and the other follows without cancellation
     if load >= 0.0:
-        s, q = _floored_root(total, floor, arm_back / arm_pull, load / arm_pull)
+        s, q = _floored_root(total, floor, arm_back / arm_pull, load / arm_pull, ks_back,
+                             ks_pull)
         return q, s
-    return _floored_root(total, floor, arm_pull / arm_back, -load / arm_back)
+    return _floored_root(total, floor, arm_pull / arm_back, -load / arm_back, ks_pull, ks_back)
 
 
 @jit
-def _floored_root(total, floor, ratio, offset):
-    """(s, q) with q = offset + ratio s, offset >= 0, s - b^2 / s + q - b^2 / q = total:
-    Newton from the left of the root (:func:`split`)."""
+def _floored_root(total, floor, ratio, offset, ks_s=0.0, ks_q=0.0):
+    """(s, q) with q = offset + ratio s, offset >= 0, s - b^2 / s - ks_s / s^2 + q - b^2 / q -
+    ks_q / q^2 = total: Newton from the left of the root (:func:`split`)."""
     b2 = floor * floor
-    s = max((total - offset) / (1.0 + ratio), floor)     # the linear split's, or b
+    s = (total - offset) / (1.0 + ratio)           # the linear split's, or b
+    if s < floor:
+        s = floor
+    if s <= 0.0:
+        s = 1e-9 * (abs(total) + offset + floor + 1.0)
     for _ in range(1100):                          # a start with g <= 0: halve toward 0
         q = offset + ratio * s
-        if s - b2 / s + q - b2 / q - total <= 0.0:
+        if s - b2 / s - ks_s / (s * s) + q - b2 / q - ks_q / (q * q) - total <= 0.0:
             break
         s *= 0.5
     for _ in range(200):
         q = offset + ratio * s
-        g = s - b2 / s + q - b2 / q - total
-        step = -g / (1.0 + b2 / (s * s) + ratio * (1.0 + b2 / (q * q)))
+        g = s - b2 / s - ks_s / (s * s) + q - b2 / q - ks_q / (q * q) - total
+        step = -g / (1.0 + b2 / (s * s) + 2.0 * ks_s / (s * s * s)
+                     + ratio * (1.0 + b2 / (q * q) + 2.0 * ks_q / (q * q * q)))
         s += step
         if step <= 1e-14 * (s + floor):
             break
@@ -186,10 +195,12 @@ def _floored_root(total, floor, ratio, offset):
 
 
 @jit
-def split_many(total, floor, arm_pull, arm_back, load, t_pull, t_back):
+def split_many(total, floor, arm_pull, arm_back, load, t_pull, t_back, ks_pull=0.0,
+               ks_back=0.0):
     """:func:`split` over arrays, into ``t_pull`` and ``t_back``."""
     for i in range(load.shape[0]):
-        t_pull[i], t_back[i] = split(total, floor, arm_pull[i], arm_back[i], load[i])
+        t_pull[i], t_back[i] = split(total, floor, arm_pull[i], arm_back[i], load[i], ks_pull,
+                                     ks_back)
 
 
 @jit
@@ -207,7 +218,8 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     low_start = g[10]
     low_end = g[11]
     load = C[C_I2] * a2 + C[C_D2] * w2 + torque
-    t_up, t_low = split(C[C_SUM], C[C_FLOOR], up_start, low_end, load)
+    t_up, t_low = split(C[C_SUM], C[C_FLOOR], up_start, low_end, load, C[C_KS_UP],
+                        C[C_KS_LOW])
     tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
     if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc):
         tight = t_up

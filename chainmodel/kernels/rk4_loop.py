@@ -79,7 +79,7 @@ from ..outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TEN
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
                     P_RHOA, P_RIGID, evaluate, evaluate_rate)
-from .spans import A_LOWER_TIGHT
+from .spans import A_LAG_W, A_LOWER_TIGHT, P_LAG
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
            "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
@@ -102,6 +102,9 @@ C_SIZE = 19
 #: stability limit itself (2 sqrt 2), an outer bound on the automatic step
 CF_STEP, CF_THETA, CF_STAB, CF_LIMIT, CF_MAX = range(5)
 CF_SIZE = 5
+
+#: the share of level 1's lag rate the step rule counts as a frequency (omega_estimate)
+LAG_SHARE = 0.25
 
 # --- model constants of the loop (TorsionalModel.loop_constants) ------------------------------
 #: sprockets' highest natural frequency (bound), tooth ratio n_driver / n_driven, the level-1
@@ -407,8 +410,16 @@ def omega_estimate(aux, G, P, Q):
     bound Q_W_SPROCKET (stiffest spans, TorsionalModel.sprocket_frequencies) and, at level 2,
     the highest Galerkin mode of each span at its current tension,
     n pi / lbar sqrt((T - rho S^2) / rho) (seed 004 eq 61, dimensional). The span modes are
-    what changes with the state: a tight span under load rings faster than at rest."""
+    what changes with the state: a tight span under load rings faster than at rest. Level 1's
+    lagged sag (P_LAG) decays at its spans' first string frequency lambda (aux A_LAG_W),
+    counted as a frequency LAG_SHARE lambda: a real decay needs fewer steps than an oscillation
+    of its rate (RK4 is stable on it to h lambda = 2.785, and the state only follows its
+    target), so at the default tolerance (h w = 0.507) h lambda <= 2; a tighter tolerance
+    tightens it with the oscillations'."""
     w = Q[Q_W_SPROCKET]
+    if P[P_LAG] > 0.5 and LAG_SHARE * aux[A_LAG_W] > w:
+        # level 1's lagged sag: a decay at the spans' first string frequency
+        w = LAG_SHARE * aux[A_LAG_W]
     n = int(P[P_MODES])
     if n > 0:
         rho = P[P_RHOA]

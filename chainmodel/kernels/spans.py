@@ -208,13 +208,21 @@ P_SAGC_U, P_SAGC_L = 30, 31  # (S k_eff)^(1/3) [N] at the tooth-period-mean link
 # (torsional.mean_link_compliance: constant, so computed once; 0: from the current count)
 P_KEFF_U, P_KEFF_L, P_CN_U, P_CN_L = 32, 33, 34, 35
 P_INV_J22, P_INV_DET = 36, 37   # 1 / J22 and 1 / (J11 J22 - J12^2) of the constant mass matrix
-P_SIZE = 38
+#: level 1's lagged sag (torsional.sag_lag): 1 when each straight span's sag follows its
+#: stretch through a state (the span's lagged elastic tension r, :func:`_lagged`), 0
+#: otherwise; P_LAG_QS 1: the quasi-static law, r the span's elastic tension itself (the
+#: equilibrium's evaluations, and level 1's statics)
+P_LAG, P_LAG_QS = 38, 39
+P_SIZE = 40
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
  A_EV_LS, A_EV_LE, A_MID_UP, A_MID_LOW, A_PHI1, A_W1, A_N_UP, A_N_LOW,
  A_LOWER_TIGHT) = range(20)
-A_SIZE = 20
+#: each span's elastic (raw, undamped) tension k_eff delta [N] (level 1's lagged sag: its
+#: state's target), and the larger lag rate [1/s]
+A_RAW_UP, A_RAW_LOW, A_LAG_W = 20, 21, 22
+A_SIZE = 23
 
 
 @jit_noalloc
@@ -283,6 +291,68 @@ def _sagging(raw, s_over_d, cube_root=0.0):
 
 
 @jit_noalloc
+def _floored_sag(raw, floor, ks, ks_root=0.0):
+    """The positive root T of T - floor^2 / T - ks / T^2 = raw: the wrap's floor and a span's
+    quasi-static sag in one law, T = softplus(raw + ks / T^2, floor) (wrap_statics._floored).
+    For ks = 0 or floor = 0 the closed forms (the floor's hyperbola; :func:`_sagging`, the
+    elastic catenary); with both, three Halley steps on the cubic T^3 - raw T^2 - floor^2 T -
+    ks = 0 from the larger of the two one-term roots, each below the root: within 1e-11
+    relative over raw in [-3000, 3000] N, floor in [0.1, 500] N and ks in [1, 1e10] N^3
+    (measured), at a fixed cost (no loop whose count depends on the input)."""
+    if ks <= 0.0:
+        if floor <= 0.0:
+            return max(raw, 0.0)
+        root = math.sqrt(raw * raw + 4.0 * floor * floor)
+        return 0.5 * (raw + root) if raw > 0.0 else 2.0 * floor * floor / (root - raw)
+    t = _sagging(raw, ks, ks_root)
+    if floor <= 0.0:
+        return t
+    b2 = floor * floor
+    root = math.sqrt(raw * raw + 4.0 * b2)
+    t_floor = 0.5 * (raw + root) if raw > 0.0 else 2.0 * b2 / (root - raw)
+    if t_floor > t:
+        t = t_floor
+    for _ in range(3):
+        f = t * (t * (t - raw) - b2) - ks
+        d1 = t * (3.0 * t - 2.0 * raw) - b2
+        t -= 2.0 * f * d1 / (2.0 * d1 * d1 - f * (6.0 * t - 2.0 * raw))
+    return t
+
+
+@jit_noalloc
+def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lbar):
+    """Level 1's span law with a lagged sag (torsional.sag_lag; docs/reduced_models.md,
+    "Level 1's lagged sag"): (T, the sag's tension T_q, dr/dt, lag rate [1/s]).
+
+    A straight span's chain hangs in its sag, whose extra arc S / T^2 (S = w_n^2 L^3 / 24,
+    the elastic catenary) it must cover. The sag cannot follow the span's stretch faster than
+    the span's first string mode lets it: its state r (``lagged``) is a lagged elastic
+    tension, relaxing to the span's own, dr/dt = omega_1 (raw_elastic - r), omega_1 = pi /
+    lbar sqrt(T_q / rho) the first string frequency at T_q, the tension the quasi-static law
+    gives at r (:func:`_floored_sag`: T_q - floor^2 / T_q - k S / T_q^2 = r), at which the sag
+    hangs. The span carries T = softplus(raw + k S / T_q^2, floor): slowly, the quasi-static
+    elastic catenary (the static sag, a slack span hanging on its sag tension under load);
+    above omega_1 the sag is frozen and the span is elastic (the torsional mode above the
+    spans' string modes, which the static sag's softness would pull down). A step that
+    overshoots r only deepens or flattens the sag for a stage (T_q stays positive whatever r
+    is; with T_q itself as the state an overshoot below zero made an unbounded sag).
+    ``quasi_static``: r is raw_elastic itself (statics), dr/dt = 0."""
+    r = raw_elastic if quasi_static else lagged
+    tq = _floored_sag(r, floor, ks, ks_root)
+    sag = ks / (tq * tq)
+    total = raw + sag
+    if floor > 0.0:
+        root = math.sqrt(total * total + 4.0 * floor * floor)
+        t = 0.5 * (total + root) if total > 0.0 else 2.0 * floor * floor / (root - total)
+    else:
+        t = total if total > 0.0 else 0.0
+    rate = math.pi / lbar * math.sqrt(tq / rho)
+    if quasi_static:
+        return t, tq, 0.0, rate
+    return t, tq, rate * (raw_elastic - r), rate
+
+
+@jit_noalloc
 def span_stiffness(links_compliance, k_link, c_link, seat_c):
     """(k_eff [N/m], c_link / n [N s/m]) of a span of ``links_compliance`` links with the seats'
     compliance in series (:func:`_tension`); the model precomputes them where the count is the
@@ -320,6 +390,25 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
     if switch > 0.0:
         return raw, switch
     return 0.0, switch
+
+
+@jit_noalloc
+def _tension_lagged(length, links, p_free, k_eff, c_n, seat_slack, length_rate, lagged,
+                    quasi_static, floor, sag, sag_root, rho, lbar):
+    """:func:`_tension` with level 1's lagged sag (:func:`_lagged`): (T, switch, the span's
+    elastic tension k_eff delta, dr/dt of the lagged elastic tension, lag rate). Without a
+    floor the switch min(k delta, T_raw) + the sag's offset changes sign where the span goes
+    slack (the law's kink); under a floor the law has no kink and the switch is the tension
+    itself, never zero (no event to locate)."""
+    delta = length - links * p_free - seat_slack
+    elastic = k_eff * delta
+    raw = elastic + c_n * length_rate
+    ks = sag * k_eff
+    t, tq, dr, rate = _lagged(raw, elastic, lagged, quasi_static, floor, ks, sag_root, rho,
+                              lbar)
+    if floor > 0.0:
+        return t, t, elastic, dr, rate
+    return t, min(elastic, raw) + ks / (tq * tq), elastic, dr, rate
 
 
 @jit_noalloc
@@ -421,10 +510,28 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
         ke_l, cn_l = P[P_KEFF_L], P[P_CN_L]
     else:
         ke_l, cn_l = span_stiffness(nl, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C])
-    t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
-                        P[P_SOFT], P[P_SAG_U], P[P_SAGC_U])
-    t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
-                        P[P_SOFT], P[P_SAG_L], P[P_SAGC_L])
+    if P[P_LAG] > 0.5:
+        # level 1's lagged sag: states r_up, r_low after the sprockets' (and any modes')
+        lag = base + 4 * n
+        qs = P[P_LAG_QS] > 0.5
+        rho = P[P_RHOA]
+        t_u, g_u, q_u, dx[lag], w_u = _tension_lagged(
+            lu, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u, x[lag], qs, P[P_SOFT],
+            P[P_SAG_U], P[P_SAGC_U], rho, P[P_LBAR_U])
+        t_l, g_l, q_l, dx[lag + 1], w_l = _tension_lagged(
+            ll, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l, x[lag + 1], qs, P[P_SOFT],
+            P[P_SAG_L], P[P_SAGC_L], rho, P[P_LBAR_L])
+        aux[A_RAW_UP] = q_u
+        aux[A_RAW_LOW] = q_l
+        aux[A_LAG_W] = w_u if w_u > w_l else w_l
+    else:
+        t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
+                            P[P_SOFT], P[P_SAG_U], P[P_SAGC_U])
+        t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
+                            P[P_SOFT], P[P_SAG_L], P[P_SAGC_L])
+        aux[A_RAW_UP] = 0.0
+        aux[A_RAW_LOW] = 0.0
+        aux[A_LAG_W] = 0.0
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
     j11 = P[P_J11]

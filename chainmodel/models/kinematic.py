@@ -50,18 +50,19 @@ __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stif
            "seat_series_compliance", "seated_tension", "pretension_error", "loose_chain_error"]
 
 
-def split_tensions(sum_tension, arm_pull, arm_back, torque, floor=0.0):
+def split_tensions(sum_tension, arm_pull, arm_back, torque, floor=0.0, ks_pull=0.0,
+                   ks_back=0.0):
     """Tensions (T_pull, T_back) with T_pull a_pull - T_back a_back = torque and the raw
-    tensions summing to ``sum_tension``; without a ``floor`` the tensions are the raw ones,
-    neither negative; with one each is the floored law of levels 1-2 (vectorised
-    :func:`chainmodel.kernels.kinematic.split`)."""
+    tensions summing to ``sum_tension``; without a ``floor`` or sag the tensions are the raw
+    ones, neither negative; with them each is the floored, sagging law of levels 1-2
+    (vectorised :func:`chainmodel.kernels.kinematic.split`)."""
     from ..kernels.kinematic import split_many
     arm_pull, arm_back, torque = np.broadcast_arrays(
         *(np.ascontiguousarray(v, dtype=float) for v in (arm_pull, arm_back, torque)))
     shape = torque.shape
     t_pull, t_back = np.empty(torque.size), np.empty(torque.size)
     split_many(float(sum_tension), float(floor), arm_pull.ravel(), arm_back.ravel(),
-               torque.ravel(), t_pull, t_back)
+               torque.ravel(), t_pull, t_back, float(ks_pull), float(ks_back))
     return t_pull.reshape(shape), t_back.reshape(shape)
 
 
@@ -156,12 +157,35 @@ class KinematicModel(Model):
         return 0.0 if self.drive.links is None else float(span_ends(self.drive, self.params)[2])
 
     @cached_property
+    def _sag_ks(self) -> tuple[float, float]:
+        """(upper, lower) span's sag term times its stiffness, k_eff S [N^3]
+        (:func:`~chainmodel.models.wrap_statics.straight_span_sags`, ``torsional.sag_lag``):
+        level 1's lagged sag held quasi-statically, so a slack span under load hangs on its sag
+        tension as in level 3 (docs/reduced_models.md, "Level 1's lagged sag"); k_eff =
+        1 / (n / k + c) with n the tooth-period-mean link count and c the span ends'
+        compliance. (0, 0) without it."""
+        from .wrap_statics import span_ends, straight_span_sags
+        p, d = self.params, self.drive
+        if d.links is None or not p.get("torsional.sag_lag", True):
+            return 0.0, 0.0
+        sags = straight_span_sags(d, p)
+        if not max(sags) > 0.0:
+            return 0.0, 0.0
+        from .chain_inertia import reference_geometry
+        r = reference_geometry(d)
+        c = span_ends(d, p, stretch=sum(sags))[0]
+        k = p["chain.link_stiffness"]
+        return tuple(s / (n / k + c) for s, n in zip(sags, (r["n_up"], r["n_low"])))
+
+    @cached_property
     def _raw_sum(self) -> float:
         """The sum of the spans' raw (linear-law) tensions, which a rigid chain keeps: 2 T_h,
-        or 2 (T_h - b^2 / T_h) under the floor b (the raw tension whose floored value is T_h),
-        T_h the tension the spans hold at rest (:meth:`held_tension`)."""
+        less b^2 / T_h per span under the floor b and k_eff S / T_h^2 per span with its sag
+        (the raw tension whose law gives T_h), T_h the tension the spans hold at rest
+        (:meth:`held_tension`)."""
         from .wrap_statics import raw_tension
-        return 2.0 * raw_tension(self._held_tension, self._floor)
+        t = self._held_tension
+        return 2.0 * raw_tension(t, self._floor) - (sum(self._sag_ks) / (t * t) if t > 0 else 0.0)
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
@@ -193,7 +217,7 @@ class KinematicModel(Model):
             load = (p["driven.inertia"] * rot.driven_acceleration
                     + p["driven.damping"] * rot.driven_speed + torque[sel])
             t_up, t_low = split_tensions(self._raw_sum, g.upper.arm_start,
-                                         g.lower.arm_end, load, self._floor)
+                                         g.lower.arm_end, load, self._floor, *self._sag_ks)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
             # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
@@ -228,6 +252,7 @@ class KinematicModel(Model):
         C[KK.C_I1], C[KK.C_I2], C[KK.C_D2] = (p["driver.inertia"], p["driven.inertia"],
                                               p["driven.damping"])
         C[KK.C_SUM], C[KK.C_FLOOR] = self._raw_sum, self._floor
+        C[KK.C_KS_UP], C[KK.C_KS_LOW] = self._sag_ks
         C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
                                                           * math.cos(p["drive.inclination"]))
         C[KK.C_RATIO] = d.tooth_ratio

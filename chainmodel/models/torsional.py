@@ -54,6 +54,7 @@ from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia
 from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
 from .static_tension import seat_series_compliance, seat_stiffness
 from .wrap_statics import (held_span_tension, honoured, span_ends, span_sag_terms,
+                           straight_span_sags,
                            static_span_tension)
 
 __all__ = ["TorsionalModel", "seat_stiffness"]
@@ -85,10 +86,17 @@ class TorsionalModel(Model):
                      "chain.link_mass", "driver.inertia", "driven.inertia", "driven.damping",
                      "input_shaft.stiffness", "input_shaft.damping", "input_shaft.rigid",
                      "contact.stiffness", "torsional.chain_inertia", "torsional.seat_compliance",
-                     "torsional.mean_link_compliance",
+                     "torsional.mean_link_compliance", "torsional.sag_lag",
                      "gravity"):
             p[name] = BY_NAME[name].check(p[name])
         self.rigid = bool(p["input_shaft.rigid"])
+        # level 1's lagged sag: a state per span (not with string modes, which sag themselves)
+        self.lag = (self.n_modes == 0 and bool(p["torsional.sag_lag"])
+                    and max(self._sag_terms) > 0.0)
+        if self.lag:
+            self.second_order = False     # [angles, speeds, r_up, r_low]: not [q, v]
+            self.first_order_states = (" (level 1's lagged sag adds a first-order state per "
+                                       "span; torsional.sag_lag = false leaves it [q, v])")
         self.G = S.geometry_constants(drive)
         self.P = self._parameter_vector()
         self._dx = None
@@ -141,12 +149,18 @@ class TorsionalModel(Model):
 
     @cached_property
     def _sag_terms(self) -> tuple[float, float]:
-        """(S_upper, S_lower) [N^2 m] the span law holds itself: here each straight span's
-        quasi-static sag (wrap_statics.span_sag_terms; not with torsional.wrap_statics, whose
-        fitted ends and floor hold level 3's statics); level 2's string modes hold theirs."""
-        if self.params["torsional.wrap_statics"]:
-            return 0.0, 0.0
-        return span_sag_terms(self.drive, self.params)
+        """(S_upper, S_lower) [N^2 m] the span law holds itself: each straight span's sag
+        (level 2's string modes hold theirs, :class:`~chainmodel.models.modal.ModalModel`).
+        With ``torsional.sag_lag`` (the default) through the lagged sag of
+        :func:`chainmodel.kernels.spans._lagged`, the terms of
+        :func:`~chainmodel.models.wrap_statics.straight_span_sags` (on level 3's wrap the
+        parabola's, over which the wrap's ends and floor are fitted). Without it: none on the
+        wrap, the quasi-static sag on the seat ladder (before the twentieth session of issue
+        21)."""
+        p = self.params
+        if p["torsional.wrap_statics"] or p["torsional.sag_lag"]:
+            return straight_span_sags(self.drive, p)
+        return span_sag_terms(self.drive, p)      # the quasi-static sag on the ladder
 
     def _parameter_vector(self) -> np.ndarray:
         p, d = self.params, self.drive
@@ -170,6 +184,9 @@ class TorsionalModel(Model):
             P[S.P_NBAR_U], P[S.P_NBAR_L] = self.reference["n_up"], self.reference["n_low"]
         if self.n_modes == 0:
             P[S.P_SAG_U], P[S.P_SAG_L] = self._sag_terms
+        if self.lag:
+            P[S.P_LAG] = 1.0
+            P[S.P_LBAR_U], P[S.P_LBAR_L] = self.reference["l_up"], self.reference["l_low"]
         self._write_span_ends(P, self._span_ends)
         return P
 
@@ -196,9 +213,11 @@ class TorsionalModel(Model):
 
     @property
     def state_names(self) -> tuple[str, ...]:
+        lag = (("upper_span.lagged_elastic_tension", "lower_span.lagged_elastic_tension")
+               if self.lag else ())
         if self.rigid:
-            return ("driven.angle", "driven.speed")
-        return ("driver.angle", "driven.angle", "driver.speed", "driven.speed")
+            return ("driven.angle", "driven.speed") + lag
+        return ("driver.angle", "driven.angle", "driver.speed", "driven.speed") + lag
 
     def _kernel(self, x, th_in, w_in, a_in, load):
         dx = np.empty(self.n_states)
@@ -232,6 +251,14 @@ class TorsionalModel(Model):
     def _modal_initial(self, u: Inputs) -> np.ndarray:
         return np.empty(0)
 
+    def _static_P(self) -> np.ndarray:
+        """A copy of the parameter vector with the lagged sag quasi-static (spans.P_LAG_QS):
+        the law the equilibrium holds, each span's lagged tension its elastic one (a copy per
+        call: the wrap fit rewrites the span ends in P as it goes)."""
+        P = self.P.copy()
+        P[S.P_LAG_QS] = 1.0
+        return P
+
     def initial_state(self, u: Inputs) -> np.ndarray:
         """Rest, in static equilibrium under the load torque ``u.torque`` with the input shaft
         held at ``u.angle``: the driven (and, with a flexible shaft, the driver) rotation that
@@ -242,13 +269,15 @@ class TorsionalModel(Model):
         from ..kernels.kinematic import fourbar_constants
         d = self.drive
         modal = self._modal_initial(u)
-        x = np.concatenate([np.zeros(self.n_sprocket_states), modal])
+        x = np.concatenate([np.zeros(self.n_sprocket_states), modal,
+                            np.zeros(2 if self.lag else 0)])
         K = self.__dict__.get("_fourbar_constants")
         if K is None:
             K = self.__dict__["_fourbar_constants"] = fourbar_constants(d)
         phi2_kin = scalar_rotation(float(u.angle), 0.0, 0.0, False, K)[0]
+        P = self._static_P() if self.lag else self.P
         status = E.static_state(float(u.angle), float(u.torque), phi2_kin, d.tooth_ratio,
-                                math.pi / d.n_driven, math.pi / d.n_driver, x, self.G, self.P)
+                                math.pi / d.n_driven, math.pi / d.n_driver, x, self.G, P)
         if status == E.STATUS_NO_DRIVEN:
             p = self.params
             raise ValueError(
@@ -262,6 +291,11 @@ class TorsionalModel(Model):
         if status == E.STATUS_NO_DRIVER:  # pragma: no cover - the shaft spring always brackets
             raise ValueError("no static equilibrium of the driver on input_shaft.stiffness "
                              f"= {self.params['input_shaft.stiffness']:g} N.m/rad")
+        if self.lag:
+            # the lagged elastic tensions at rest: each span's own (the sag has followed)
+            dx, aux = np.empty(self.n_states), np.empty(S.A_SIZE)
+            S.evaluate(x, float(u.angle), 0.0, 0.0, float(u.torque), self.G, P, dx, aux)
+            x[-2], x[-1] = aux[S.A_RAW_UP], aux[S.A_RAW_LOW]
         return x
 
     def _driven_torque(self, x, u):
@@ -420,7 +454,10 @@ class TorsionalModel(Model):
     def state_scale(self) -> np.ndarray:
         """Typical magnitudes of the states (absolute tolerances of adaptive steppers are
         rtol times these): 1e-3 rad and 1 rad/s for the sprockets."""
-        return np.array([1e-3] * (self.n_sprocket_states // 2) + [1.0] * (self.n_sprocket_states // 2))
+        scale = [1e-3] * (self.n_sprocket_states // 2) + [1.0] * (self.n_sprocket_states // 2)
+        if self.lag:     # the spans' lagged elastic tensions [N]
+            scale += [max(self.held_tension(), 1.0)] * 2
+        return np.array(scale)
 
     # --- outputs ---------------------------------------------------------------------------
     def output_descriptions(self) -> dict[str, str]:

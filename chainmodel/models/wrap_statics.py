@@ -73,6 +73,7 @@ from . import static_tension as ST
 
 __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_tension",
            "held_span_tension", "weighted_static_tension", "weighted", "span_sag_terms",
+           "straight_span_sags",
            "modal_stiffness", "softplus",
            "LOAD_STEP", "SLACK_SHARE", "SHORTFALL", "slack_shortfall", "sag_tension",
            "unavailable", "honoured", "fallbacks",
@@ -262,14 +263,17 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
         else:
             _FELL_BACK.pop((None,) + key, None)
     dt = m_b / ro
+    # the slack span under the fit's load hangs on its sag in level 3: the floor is fitted
+    # over the spans' parabola sag, so it stands only for what the sag does not hold
+    sags = SG.span_terms(drive, p3)
     try:
-        c, f, b = _ends(drive, p3, t_held, slack3, km, dt)
+        c, f, b = _ends(drive, p3, t_held, slack3, km, dt, sags)
     except ValueError as exc:
         if t_held == t0:
             raise
         # the tooth-period mean leaves the spans too soft at rest for level 3's mode (a floor
         # fitted under a low mean): the ends hold the angle-0 tension, as before the mean
-        c, f, b = _ends(drive, p3, t0, slack3, km, dt)
+        c, f, b = _ends(drive, p3, t0, slack3, km, dt, sags)
         held_note = (f"levels 0-2's spans hold level 3's static tension at driver angle 0 "
                      f"({t0:.4g} N), not its tooth-period mean ({t_held:.4g} N): on the mean "
                      f"{exc} (their running span means then sit off level 3's by the "
@@ -364,7 +368,9 @@ def slack_shortfall(drive: Drive, params: Mapping[str, Any], level: int | None) 
     fit = wrap_fit(drive, params)
     if math.isnan(fit.loaded_slack) or fit.softness > 0.0:
         return None
-    spans = _mean_links(drive) + (params["chain.link_stiffness"], (0.0, 0.0))
+    # the sag levels 0-1 carry themselves (torsional.sag_lag): the law's slack span with it
+    spans = _mean_links(drive) + (params["chain.link_stiffness"],
+                                  straight_span_sags(drive, params))
     held = _split_slack(fit.held_tension, 0.0, fit.compliance, spans, fit.split_difference)
     if held >= (1.0 - SHORTFALL) * fit.loaded_slack:
         return None
@@ -483,6 +489,27 @@ def span_sag_terms(drive: Drive, params: Mapping[str, Any]) -> tuple[float, floa
     if not s_eff > 0.0 or not s > 0.0:
         return 0.0, 0.0
     return tuple(s_eff / s * term for term in terms)
+
+
+def straight_span_sags(drive: Drive, params: Mapping[str, Any]) -> tuple[float, float]:
+    """(S_upper, S_lower) [N^2 m]: the sag terms levels 0-1's straight spans carry themselves
+    (level 0 quasi-statically, level 1 through its lagged sag: ``torsional.sag_lag``). On
+    level 3's wrap (``torsional.wrap_statics`` honoured) the parabola's w_n^2 L^3 / 24 per span
+    (:func:`~chainmodel.models.span_sag.span_terms`), over which :func:`wrap_fit` fits the
+    floor; on the seat ladder (also where the fit is refused) the terms of its elastic
+    catenary (:func:`span_sag_terms`). (0, 0) without gravity or a link count, and with
+    ``torsional.sag_lag`` off on the wrap (there the floor then holds the slack span alone);
+    off on the ladder level 1 keeps the quasi-static sag, level 0 none (before the twentieth
+    session of issue 21)."""
+    if drive.links is None or params["gravity"] == 0.0:
+        return 0.0, 0.0
+    if params.get("torsional.wrap_statics"):
+        if not params.get("torsional.sag_lag", True):
+            return 0.0, 0.0
+        span_ends(drive, params)            # the fit, or its refusal recorded
+        if honoured(drive, params):
+            return tuple(float(v) for v in SG.span_terms(drive, params))
+    return span_sag_terms(drive, params)
 
 
 def weighted(drive: Drive, params: Mapping[str, Any], *,
