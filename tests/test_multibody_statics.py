@@ -225,3 +225,56 @@ def test_the_modes_responses_are_the_initial_velocitys_modal_expansion(name):
     whole = math.sqrt(mass[driven] / (ref @ (mass * ref))) * ref[driven]
     assert response.sum() == pytest.approx(whole, rel=1e-6)
     assert np.allclose(response ** 2, share * mac, rtol=1e-9, atol=1e-15)
+
+
+_HANGING_08A = """
+name = "08A 12/36, no pretension"
+chain = "08A"
+[operating]
+input_speed_rpm = 0.0
+load_torque = 0.0
+[parameters]
+"drive.driver_teeth" = 12
+"drive.driven_teeth" = 36
+"drive.links" = 106
+"drive.centre_distance" = 0.0
+"chain.pretension" = 0.0
+"""
+
+
+def test_a_chain_its_weight_holds_starts_from_its_statics(tmp_path):
+    """An 08A 12/36 chain with no pretension at the tight wrap (an audit's drive): in the
+    straight layout its links carry nothing, so level 3 starts it hanging in its sag, and held
+    at rest it stays there - its span tensions within 0.1 % of its static tension over 0.3 s
+    (from the straight layout it dropped into its sag and swung between 0 and 115 N for the
+    whole second). The rule, Ernst's 2 k_span S / T^3 of the straight layout against
+    multibody.SAG_START, is written here from the chain's values: pretensioned drives (xu2010,
+    C1) start straight as before; the long 16B spans of C3 at 500 N do not."""
+    import chainmodel
+    from chainmodel.models.multibody import SAG_START
+    path = tmp_path / "hanging.toml"
+    path.write_text(_HANGING_08A)
+    r = chainmodel.simulate(str(path), fidelity=3, duration=0.3, output_interval=1e-3)
+    both = 0.5 * (r["tight_span.tension"] + r["slack_span.tension"])
+    assert np.max(np.abs(both / r.static_tension - 1.0)) < 1e-3
+    for name, hangs in (("xu2010", False), ("C1", False), ("C3", True)):
+        model = load_scene(name, fidelity=3).model()
+        x = model.straight_layout(Inputs(0.0, 0.0, 0.0))
+        z = x[2:2 + 2 * model.M].reshape(model.M, 2)
+        length = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
+        p, d = model.params, model.drive
+        k = p["chain.link_stiffness"]
+        t = k * np.mean(np.maximum(length - (d.pitch - p["chain.pretension"] / k), 0.0))
+        # the spans' parabola: w_n^2 L^3 / 24 with the weight across each span
+        g = chain_geometry(d, np.array([0.0]), np.array([0.0]))
+        w = p["gravity"] * p["chain.link_mass"] / d.pitch
+        up = math.atan2(d.y_c, d.x_c) - p["drive.inclination"]
+        ernst = []
+        for span, links in ((g.upper, g.upper_links), (g.lower, g.lower_links)):
+            direction = float(span.direction[0])
+            wn = abs(w * math.cos(direction - up))
+            n = float(links[0])
+            s = wn * wn * float(span.length[0]) ** 3 / 24.0
+            ernst.append(2.0 * k / n * s / t ** 3)
+        assert (max(ernst) > SAG_START) == hangs, (name, ernst)
+        assert model.hangs_on_its_weight(length) == hangs, name

@@ -148,6 +148,9 @@ def articulation_cut(teeth: int, pitch: float, gamma: float, tip: float, roller_
 
 #: settled static tensions per (drive, parameters): a scene's every run asks for the same one
 _STATIC_CACHE: dict = {}
+#: a span whose sag softens it at rest by more than this (Ernst's 2 k_span S / T^3) in the
+#: straight layout makes the chain start from its statics (MultibodyModel.hangs_on_its_weight)
+SAG_START = 0.1
 
 
 class MultibodyModel(Model):
@@ -271,19 +274,27 @@ class MultibodyModel(Model):
             return phi2_k
 
     def initial_state(self, u: Inputs) -> np.ndarray:
-        """At rest, the chain wrapped with straight spans (:meth:`straight_layout`). A chain too
-        long for straight spans (a link shorter than its free length by more than the
-        pin-bushing play: its plates would bear) starts from its static equilibrium instead,
-        its spans hanging in their sag (:func:`~chainmodel.models.multibody_statics
-        .static_state`, no load, the driver at u.angle): from the straight layout such a
-        chain starts with its links in compression (112 kN on xu2010 with two links too many),
-        a start-up shock the load did not cause. Where the statics find no equilibrium, the
-        straight layout."""
+        """At rest, the chain wrapped with straight spans (:meth:`straight_layout`). Two chains
+        start from their static equilibrium instead, their spans hanging in their sag
+        (:func:`~chainmodel.models.multibody_statics.static_state`, no load, the driver at
+        u.angle):
+
+        * a chain too long for straight spans (a link shorter than its free length by more
+          than the pin-bushing play: its plates would bear): from the straight layout it
+          starts with its links in compression (112 kN on xu2010 with two links too many), a
+          start-up shock the load did not cause;
+        * a chain whose weight sets its tension (:meth:`hangs_on_its_weight`): from straight
+          spans it drops into its sag and rings for the whole run (an 08A 12/36 drive with no
+          pretension, held at rest for 1 s, swung between 0 and 115 N about a 44 N mean
+          against its static 56.5 N, and the ring-down of a 16B drive carried the sag's swing).
+
+        Where the statics find no equilibrium, the straight layout."""
         x = self.straight_layout(u)
         n = 2 + 2 * self.M
         z = x[2:n].reshape(self.M, 2)
         length = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
-        if np.min(length) >= self.P[K.I_L0] - self.P[K.I_GAP]:
+        if (np.min(length) >= self.P[K.I_L0] - self.P[K.I_GAP]
+                and not self.hangs_on_its_weight(length)):
             return x
         from .multibody_statics import static_state
         try:
@@ -296,6 +307,24 @@ class MultibodyModel(Model):
         rest = np.array(sol.state, float)
         rest[n:] = 0.0
         return rest
+
+    def hangs_on_its_weight(self, length: np.ndarray) -> bool:
+        """Whether the straight layout's chain, its links ``length`` long [m], is held by its
+        weight more than by its stretch: its links' mean tension T (the stretch beyond their
+        free length, k (l - l_0)) is zero, or a span's sag softens it at rest by more than
+        ``SAG_START`` (Ernst's equivalent modulus: 2 k_span S / T^3 > SAG_START, S = w_n^2 L^3
+        / 24 the span's parabola, k_span = k / n its links in series; docs/multibody.md
+        "Initial state"). A pretensioned drive (xu2010, C1: 0.002-0.03) starts straight."""
+        from .span_sag import span_terms
+        k = self.params["chain.link_stiffness"]
+        tension = k * float(np.mean(np.maximum(length - self.P[K.I_L0], 0.0)))
+        sags = span_terms(self.drive, self.params)
+        if not max(sags) > 0.0:
+            return False
+        if not tension > 0.0:
+            return True
+        links = (max(self._n_upper, 1), max(self._n_lower, 1))
+        return max(2.0 * k / n * s / tension ** 3 for s, n in zip(sags, links)) > SAG_START
 
     def straight_layout(self, u: Inputs) -> np.ndarray:
         """At rest, the chain wrapped with straight spans (kinematics.wrapping.roller_positions)
