@@ -103,9 +103,6 @@ C_SIZE = 19
 CF_STEP, CF_THETA, CF_STAB, CF_LIMIT, CF_MAX = range(5)
 CF_SIZE = 5
 
-#: the share of level 1's lag rate the step rule counts as a frequency (omega_estimate)
-LAG_SHARE = 0.25
-
 # --- model constants of the loop (TorsionalModel.loop_constants) ------------------------------
 #: sprockets' highest natural frequency (bound), tooth ratio n_driver / n_driven, the level-1
 #: quasi-static sag coefficient rho g_n / 8, the span-mode amplitude limit of ModalModel.check
@@ -411,15 +408,14 @@ def omega_estimate(aux, G, P, Q):
     the highest Galerkin mode of each span at its current tension,
     n pi / lbar sqrt((T - rho S^2) / rho) (seed 004 eq 61, dimensional). The span modes are
     what changes with the state: a tight span under load rings faster than at rest. Level 1's
-    lagged sag (P_LAG) decays at its spans' first string frequency lambda (aux A_LAG_W),
-    counted as a frequency LAG_SHARE lambda: a real decay needs fewer steps than an oscillation
-    of its rate (RK4 is stable on it to h lambda = 2.785, and the state only follows its
-    target), so at the default tolerance (h w = 0.507) h lambda <= 2; a tighter tolerance
-    tightens it with the oscillations'."""
+    lagged sag (P_LAG): aux A_LAG_W, the larger of spans.LAG_SHARE times its decay rate and
+    its state's relative rate |dT_q/dt| / T_q (spans._lagged), so a step moves the sag's
+    tension by at most h w of itself; a tighter tolerance tightens it with the
+    oscillations'."""
     w = Q[Q_W_SPROCKET]
-    if P[P_LAG] > 0.5 and LAG_SHARE * aux[A_LAG_W] > w:
-        # level 1's lagged sag: a decay at the spans' first string frequency
-        w = LAG_SHARE * aux[A_LAG_W]
+    if P[P_LAG] > 0.5 and aux[A_LAG_W] > w:
+        # level 1's lagged sag (spans._lagged: its decay's share, or its state's own rate)
+        w = aux[A_LAG_W]
     n = int(P[P_MODES])
     if n > 0:
         rho = P[P_RHOA]

@@ -207,21 +207,33 @@ P_SAGC_U, P_SAGC_L = 30, 31  # (S k_eff)^(1/3) [N] at the tooth-period-mean link
 # k_eff [N/m] and c_link / n [N s/m] of each span at its tooth-period-mean link count
 # (torsional.mean_link_compliance: constant, so computed once; 0: from the current count)
 P_KEFF_U, P_KEFF_L, P_CN_U, P_CN_L = 32, 33, 34, 35
+#: level 1's lagged sag relaxes at this share of the span's first string frequency: a first-
+#: order lag dissipates near its corner, and at the string frequency itself it more than
+#: doubled C1's torsional damping (its mode, 24 Hz, lies just above its spans' string modes:
+#: 0.45 -> 1.26 % of critical, level 3 0.47 %); at an eighth 0.74 % (level 2 0.68 %), while the
+#: sag's mean still follows within about eight string periods (0.1-0.2 s); docs/reduced_models.md
+LAG_RATE = 0.125
 P_INV_J22, P_INV_DET = 36, 37   # 1 / J22 and 1 / (J11 J22 - J12^2) of the constant mass matrix
 #: level 1's lagged sag (torsional.sag_lag): 1 when each straight span's sag follows its
-#: stretch through a state (the span's lagged elastic tension r, :func:`_lagged`), 0
-#: otherwise; P_LAG_QS 1: the quasi-static law, r the span's elastic tension itself (the
+#: stretch through a state (the tension T_q its sag hangs at, :func:`_lagged`), 0 otherwise;
+#: P_LAG_QS 1: the quasi-static law, T_q the law's at the span's elastic tension (the
 #: equilibrium's evaluations, and level 1's statics)
 P_LAG, P_LAG_QS = 38, 39
-P_SIZE = 40
+#: the lag's rate as a share of the span's first string frequency (LAG_RATE)
+P_LAG_RATE = 40
+#: the share of level 1's lag rate the step rule counts as a frequency: a decay needs fewer
+#: steps than an oscillation of its rate (RK4 is stable on it to h lambda = 2.785, and the
+#: state only follows its target); at the default tolerance (h w = 0.507) h lambda <= 2
+LAG_SHARE = 0.25
+P_SIZE = 41
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
  A_EV_LS, A_EV_LE, A_MID_UP, A_MID_LOW, A_PHI1, A_W1, A_N_UP, A_N_LOW,
  A_LOWER_TIGHT) = range(20)
-#: each span's elastic (raw, undamped) tension k_eff delta [N] (level 1's lagged sag: its
-#: state's target), and the larger lag rate [1/s]
-A_RAW_UP, A_RAW_LOW, A_LAG_W = 20, 21, 22
+#: each span's sag tension T_q [N] (level 1's lagged sag: its state; at rest the quasi-static
+#: law's), and the larger of the two spans' rates the step rule counts [1/s] (_lagged)
+A_LAG_UP, A_LAG_LOW, A_LAG_W = 20, 21, 22
 A_SIZE = 23
 
 
@@ -320,25 +332,33 @@ def _floored_sag(raw, floor, ks, ks_root=0.0):
 
 
 @jit_noalloc
-def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lbar):
+def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lbar, share):
     """Level 1's span law with a lagged sag (torsional.sag_lag; docs/reduced_models.md,
-    "Level 1's lagged sag"): (T, the sag's tension T_q, dr/dt, lag rate [1/s]).
+    "Level 1's lagged sag").
 
     A straight span's chain hangs in its sag, whose extra arc S / T^2 (S = w_n^2 L^3 / 24,
     the elastic catenary) it must cover. The sag cannot follow the span's stretch faster than
-    the span's first string mode lets it: its state r (``lagged``) is a lagged elastic
-    tension, relaxing to the span's own, dr/dt = omega_1 (raw_elastic - r), omega_1 = pi /
-    lbar sqrt(T_q / rho) the first string frequency at T_q, the tension the quasi-static law
-    gives at r (:func:`_floored_sag`: T_q - floor^2 / T_q - k S / T_q^2 = r), at which the sag
-    hangs. The span carries T = softplus(raw + k S / T_q^2, floor): slowly, the quasi-static
-    elastic catenary (the static sag, a slack span hanging on its sag tension under load);
-    above omega_1 the sag is frozen and the span is elastic (the torsional mode above the
-    spans' string modes, which the static sag's softness would pull down). A step that
-    overshoots r only deepens or flattens the sag for a stage (T_q stays positive whatever r
-    is; with T_q itself as the state an overshoot below zero made an unbounded sag).
-    ``quasi_static``: r is raw_elastic itself (statics), dr/dt = 0."""
-    r = raw_elastic if quasi_static else lagged
-    tq = _floored_sag(r, floor, ks, ks_root)
+    the span's first string mode lets it. The state T_q (``lagged``) is the tension at which
+    the sag hangs: the quasi-static law at a lagged elastic tension r (:func:`_floored_sag`:
+    T_q - floor^2 / T_q - k S / T_q^2 = r), r relaxing to the span's own elastic tension,
+    dr/dt = lambda (raw_elastic - r), lambda = s omega_1, omega_1 = pi / lbar sqrt(T_q / rho)
+    the first string frequency at T_q (s = ``share``, LAG_RATE); so dT_q/dt = lambda
+    (raw_elastic - r) / (1 + floor^2 / T_q^2 + 2 k S / T_q^3), r explicit in T_q (no root per
+    evaluation; the exact change of variables of the linear law in r, so the same solution).
+    Where a span dips slack within a tooth its T_q moves fast relative to itself; the step
+    rule counts that relative rate (the fourth value), so no stage takes T_q below zero (the
+    first version, at the full string frequency and without it, put an unbounded sag into C1
+    at a sudden 400 rpm: 1e26 N). The span carries T = softplus(raw + k S / T_q^2, floor):
+    slowly, the quasi-static elastic catenary (the static sag, a slack span hanging on its sag
+    tension under load); well above lambda the sag is frozen and the span is elastic (the
+    torsional mode above the spans' string modes, which the static sag's softness would pull
+    down). ``quasi_static``: T_q is the law's at raw_elastic itself (statics), dT_q/dt = 0.
+
+    Returns (T, the sag's tension T_q, dT_q/dt, the step rule's rate [1/s])."""
+    if quasi_static:
+        tq = _floored_sag(raw_elastic, floor, ks, ks_root)
+    else:
+        tq = lagged if lagged > 1e-9 else 1e-9
     sag = ks / (tq * tq)
     total = raw + sag
     if floor > 0.0:
@@ -346,10 +366,16 @@ def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lba
         t = 0.5 * (total + root) if total > 0.0 else 2.0 * floor * floor / (root - total)
     else:
         t = total if total > 0.0 else 0.0
-    rate = math.pi / lbar * math.sqrt(tq / rho)
+    rate = share * math.pi / lbar * math.sqrt(tq / rho)
     if quasi_static:
-        return t, tq, 0.0, rate
-    return t, tq, rate * (raw_elastic - r), rate
+        return t, tq, 0.0, LAG_SHARE * rate
+    b2 = floor * floor / (tq * tq)
+    dtq = rate * (raw_elastic - tq * (1.0 - b2) + sag) / (1.0 + b2 + 2.0 * sag / tq)
+    # for the step rule: the larger of the decay's (a share of its rate) and the state's own
+    # relative rate |dT_q/dt| / T_q, which a span dipping slack within a tooth drives far past
+    # it (rk4_loop.omega_estimate: a step then moves T_q by at most h w of itself)
+    speed = abs(dtq) / tq
+    return t, tq, dtq, (LAG_SHARE * rate if LAG_SHARE * rate > speed else speed)
 
 
 @jit_noalloc
@@ -394,21 +420,20 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
 
 @jit_noalloc
 def _tension_lagged(length, links, p_free, k_eff, c_n, seat_slack, length_rate, lagged,
-                    quasi_static, floor, sag, sag_root, rho, lbar):
-    """:func:`_tension` with level 1's lagged sag (:func:`_lagged`): (T, switch, the span's
-    elastic tension k_eff delta, dr/dt of the lagged elastic tension, lag rate). Without a
-    floor the switch min(k delta, T_raw) + the sag's offset changes sign where the span goes
-    slack (the law's kink); under a floor the law has no kink and the switch is the tension
-    itself, never zero (no event to locate)."""
+                    quasi_static, floor, sag, sag_root, rho, lbar, share):
+    """:func:`_tension` with level 1's lagged sag (:func:`_lagged`): (T, switch, the sag's
+    tension T_q, dT_q/dt, lag rate). Without a floor the switch min(k delta, T_raw) + the
+    sag's offset changes sign where the span goes slack (the law's kink); under a floor the
+    law has no kink and the switch is the tension itself, never zero (no event to locate)."""
     delta = length - links * p_free - seat_slack
     elastic = k_eff * delta
     raw = elastic + c_n * length_rate
     ks = sag * k_eff
-    t, tq, dr, rate = _lagged(raw, elastic, lagged, quasi_static, floor, ks, sag_root, rho,
-                              lbar)
+    t, tq, dtq, rate = _lagged(raw, elastic, lagged, quasi_static, floor, ks, sag_root, rho,
+                               lbar, share)
     if floor > 0.0:
-        return t, t, elastic, dr, rate
-    return t, min(elastic, raw) + ks / (tq * tq), elastic, dr, rate
+        return t, t, tq, dtq, rate
+    return t, min(elastic, raw) + ks / (tq * tq), tq, dtq, rate
 
 
 @jit_noalloc
@@ -517,20 +542,20 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
         rho = P[P_RHOA]
         t_u, g_u, q_u, dx[lag], w_u = _tension_lagged(
             lu, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u, x[lag], qs, P[P_SOFT],
-            P[P_SAG_U], P[P_SAGC_U], rho, P[P_LBAR_U])
+            P[P_SAG_U], P[P_SAGC_U], rho, P[P_LBAR_U], P[P_LAG_RATE])
         t_l, g_l, q_l, dx[lag + 1], w_l = _tension_lagged(
             ll, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l, x[lag + 1], qs, P[P_SOFT],
-            P[P_SAG_L], P[P_SAGC_L], rho, P[P_LBAR_L])
-        aux[A_RAW_UP] = q_u
-        aux[A_RAW_LOW] = q_l
+            P[P_SAG_L], P[P_SAGC_L], rho, P[P_LBAR_L], P[P_LAG_RATE])
+        aux[A_LAG_UP] = q_u
+        aux[A_LAG_LOW] = q_l
         aux[A_LAG_W] = w_u if w_u > w_l else w_l
     else:
         t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
                             P[P_SOFT], P[P_SAG_U], P[P_SAGC_U])
         t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
                             P[P_SOFT], P[P_SAG_L], P[P_SAGC_L])
-        aux[A_RAW_UP] = 0.0
-        aux[A_RAW_LOW] = 0.0
+        aux[A_LAG_UP] = 0.0
+        aux[A_LAG_LOW] = 0.0
         aux[A_LAG_W] = 0.0
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load

@@ -186,6 +186,7 @@ class TorsionalModel(Model):
             P[S.P_SAG_U], P[S.P_SAG_L] = self._sag_terms
         if self.lag:
             P[S.P_LAG] = 1.0
+            P[S.P_LAG_RATE] = S.LAG_RATE
             P[S.P_LBAR_U], P[S.P_LBAR_L] = self.reference["l_up"], self.reference["l_low"]
         self._write_span_ends(P, self._span_ends)
         return P
@@ -213,8 +214,7 @@ class TorsionalModel(Model):
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        lag = (("upper_span.lagged_elastic_tension", "lower_span.lagged_elastic_tension")
-               if self.lag else ())
+        lag = ("upper_span.sag_tension", "lower_span.sag_tension") if self.lag else ()
         if self.rigid:
             return ("driven.angle", "driven.speed") + lag
         return ("driver.angle", "driven.angle", "driver.speed", "driven.speed") + lag
@@ -292,10 +292,10 @@ class TorsionalModel(Model):
             raise ValueError("no static equilibrium of the driver on input_shaft.stiffness "
                              f"= {self.params['input_shaft.stiffness']:g} N.m/rad")
         if self.lag:
-            # the lagged elastic tensions at rest: each span's own (the sag has followed)
+            # the sags at rest hang at the quasi-static law's tension (they have followed)
             dx, aux = np.empty(self.n_states), np.empty(S.A_SIZE)
             S.evaluate(x, float(u.angle), 0.0, 0.0, float(u.torque), self.G, P, dx, aux)
-            x[-2], x[-1] = aux[S.A_RAW_UP], aux[S.A_RAW_LOW]
+            x[-2], x[-1] = aux[S.A_LAG_UP], aux[S.A_LAG_LOW]
         return x
 
     def _driven_torque(self, x, u):
@@ -455,7 +455,7 @@ class TorsionalModel(Model):
         """Typical magnitudes of the states (absolute tolerances of adaptive steppers are
         rtol times these): 1e-3 rad and 1 rad/s for the sprockets."""
         scale = [1e-3] * (self.n_sprocket_states // 2) + [1.0] * (self.n_sprocket_states // 2)
-        if self.lag:     # the spans' lagged elastic tensions [N]
+        if self.lag:     # the tensions the spans' sags hang at [N]
             scale += [max(self.held_tension(), 1.0)] * 2
         return np.array(scale)
 
