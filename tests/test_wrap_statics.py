@@ -211,15 +211,14 @@ def test_torsional_mode_levels_1_2_on_level3s_wrap(name, level, rpm):
     """Item 3: the driven sprocket's ring-down of levels 1-2 with the option within 3 % of the
     two-inertia estimate on their wrap and of level 3's ring-down from the same start; 1 rpm
     (small amplitude: the mode) and the issue's 5 rpm. The estimate is linear: at 5 rpm the
-    ring softens with its amplitude (level 3 on C1: -2.9 % from it), so there a level may
-    depart from the estimate by 3 % plus level 3's own departure (C1 level 1: -4.0 %; the
-    issue's 3 % not met there)."""
+    ring softens with its amplitude (level 3 on C1: -2.9 % from it; level 1 -2.4 % since its
+    spans carry their lagged sag, -4.0 % before)."""
     est = _estimate(name, **ON)
     band = (0.85 * est, 1.15 * est)
     f = ring(name, level, band, rpm, **ON)
     f3 = ring(name, 3, band, rpm)
     # levels 1-2 are the two-inertia system on K_m (their own dynamics hold what they are given)
-    assert abs(f / est - 1.0) <= 0.03 + (abs(f3 / est - 1.0) if rpm > 1.0 else 0.0)
+    assert f == pytest.approx(est, rel=0.03)
     # and that is level 3's mode
     assert f == pytest.approx(f3, rel=0.03)
 
