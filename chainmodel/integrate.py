@@ -60,6 +60,7 @@ from .models.base import Inputs, Model, SimulationDiverged
 from .outputs import OUTPUT_NAMES
 from .kernels.rk4_loop import STATUS_OUTPUTS, STATUS_UNSTABLE
 from .kernels.plain_loop import run_interval
+from .kernels.span_roles import filtered_torque, role_hold
 
 __all__ = ["Stepper", "FixedStepper", "RK4", "Verlet", "Adaptive", "StepperState", "METHODS",
            "make_stepper", "SimulationDiverged", "stability_limit", "accuracy_step", "frequency_error",
@@ -101,6 +102,12 @@ class Stepper(ABC):
                              f"needs ({model.n_states},)")
         self.stats = {"steps": 0, "rhs_evaluations": 0, "events": 0, "rejected": 0,
                       "wall_time": 0.0}
+        #: the transmitted torque's running mean over about a driver tooth period, which names
+        #: the tight span where inputs arrive step by step (span_roles.filtered_torque; nan:
+        #: not started, the roles then follow the inputs)
+        self.role_torque = math.nan
+        self._role = (*model.role_constants(), float(model.drive.n_driver), 0.0)
+        model.hold_role(0.0)
         #: times at which the last (up to 1000) switching events were located
         self.event_log: deque = deque(maxlen=1000)
         self._row = np.empty(len(OUTPUT_NAMES))
@@ -134,10 +141,18 @@ class Stepper(ABC):
         if inputs is None:
             inputs = self.inputs
         if isinstance(inputs, Inputs):
-            row = self._advance_held(t_end, inputs.angle, inputs.speed, inputs.acceleration,
-                                     inputs.torque)
-        else:
-            row = self._advance_source(t_end, inputs)
+            saved = self._hold_role(t_end, inputs.speed, inputs.acceleration, inputs.torque)
+            try:
+                row = self._advance_held(t_end, inputs.angle, inputs.speed,
+                                         inputs.acceleration, inputs.torque)
+                if row is not None:
+                    return dict(zip(OUTPUT_NAMES, row.tolist()))
+                return self._advance_python(t_end, inputs)
+            except Exception:
+                self.role_torque = saved
+                raise
+        self._release_role()
+        row = self._advance_source(t_end, inputs)
         if row is not None:
             return dict(zip(OUTPUT_NAMES, row.tolist()))
         return self._advance_python(t_end, inputs)
@@ -150,12 +165,17 @@ class Stepper(ABC):
         One compiled call where the model and method have one; the same numbers as
         :meth:`advance` with ``Inputs(angle, speed, torque, acceleration)``."""
         t_end = self._check_time(t_end)
-        row = self._advance_held(t_end, angle, speed, acceleration, torque)
-        if row is None:
-            out = self._advance_python(t_end, Inputs(angle, speed, torque, acceleration))
-            row = self._row
-            for k, name in enumerate(OUTPUT_NAMES):
-                row[k] = out[name]
+        saved = self._hold_role(t_end, speed, acceleration, torque)
+        try:
+            row = self._advance_held(t_end, angle, speed, acceleration, torque)
+            if row is None:
+                out = self._advance_python(t_end, Inputs(angle, speed, torque, acceleration))
+                row = self._row
+                for k, name in enumerate(OUTPUT_NAMES):
+                    row[k] = out[name]
+        except Exception:
+            self.role_torque = saved
+            raise
         return row
 
     def outputs_held(self, angle: float, speed: float, acceleration: float, torque: float
@@ -164,6 +184,8 @@ class Stepper(ABC):
         direct feedthrough when a master sets inputs at a communication point); refused inputs
         raise ValueError."""
         self.refuse_bad_inputs(angle, speed, torque)
+        if math.isnan(self.role_torque):     # the first inputs start the running mean
+            self._hold_role(self.t, speed, acceleration, torque)
         self.model.outputs_into(self.t, self.x, angle, speed, acceleration, torque, self._row)
         return self._row
 
@@ -185,7 +207,8 @@ class Stepper(ABC):
         return self.model.outputs(self.t, self.x, self.inputs)
 
     def get_state(self) -> StepperState:
-        return StepperState(self.t, self.x.copy(), self._h_state(), self.inputs)
+        return StepperState(self.t, self.x.copy(), self._h_state(), self.inputs,
+                            {"role_torque": self.role_torque})
 
     def set_state(self, state: StepperState) -> None:
         x = np.array(state.x, float)
@@ -194,6 +217,34 @@ class Stepper(ABC):
                              f"{self.x.shape[0]}")
         self.t, self.x, self.inputs = float(state.t), x, state.inputs
         self._restore_h(state.h)
+        self.role_torque = float(state.extra.get("role_torque", math.nan))
+        hold = (0.0 if math.isnan(self.role_torque) else
+                role_hold(self.role_torque, state.inputs.speed))
+        self.model.hold_role(hold)
+        self._role = self._role[:4] + (hold,)
+
+    def _hold_role(self, t_end, speed, acceleration, torque) -> float:
+        """Advance the running mean of the transmitted torque to ``t_end`` with the inputs held
+        over the step (span_roles.filtered_torque), and have the model name the tight span by
+        its sign (span roles that do not flip with an input rippling through zero within a
+        tooth period; docs/stability.md, "Tight and slack span"). Returns the mean before the
+        step (restored if the step fails)."""
+        saved = self.role_torque
+        damping, inertia, ratio, teeth, held = self._role
+        m = torque + ratio * (damping * speed + inertia * acceleration)
+        self.role_torque = filtered_torque(saved, m, t_end - self.t, speed, teeth)
+        hold = role_hold(self.role_torque, speed)
+        if hold != held:
+            self.model.hold_role(hold)
+            self._role = (damping, inertia, ratio, teeth, hold)
+        return saved
+
+    def _release_role(self) -> None:
+        """Roles from the inputs at each evaluation (whole runs' arrays, callable sources)."""
+        self.role_torque = math.nan
+        if self._role[4] != 0.0:
+            self.model.hold_role(0.0)
+            self._role = self._role[:4] + (0.0,)
 
     def refuse_bad_inputs(self, angle, speed, torque) -> None:
         """The one place where inputs are checked before a step: raise ValueError with the
@@ -450,6 +501,7 @@ class FixedStepper(Stepper):
         if not self._has_compiled():
             return False
         times = self._check_times(times)
+        self._release_role()
         arrays = [np.ascontiguousarray(a, float) for a in (angle, speed, acceleration, torque)]
         self._run_points(times, arrays, out, self._empty_states)
         self._set_held(float(arrays[0][-1]), float(arrays[1][-1]), float(arrays[3][-1]),
@@ -460,6 +512,7 @@ class FixedStepper(Stepper):
         if not self._has_compiled() or np.size(times) < 2:
             return None
         times = self._check_times(times)
+        self._release_role()
         arrays = [np.ascontiguousarray(a, float) for a in (angle, speed, acceleration, torque)]
         states = np.empty((times.size, self.x.size))
         self._run_points(times, arrays, np.empty((0, len(OUTPUT_NAMES))), states)

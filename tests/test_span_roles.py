@@ -100,3 +100,78 @@ def test_roles_do_not_flip_within_a_tooth_period():
     m = r.time > 0.1
     g = chain_geometry(r.scene.drive, r["driver.angle"][m], r["driven.angle"][m])
     np.testing.assert_allclose(r["tight_span.length"][m], g.upper.length, rtol=1e-9)
+
+
+def _stepped(level, load, duration=0.6, rpm=120.0, h=1e-4):
+    """xu2010 stepped as the FMU steps it (Stepper.advance_held every ``h``, the inputs held
+    over each step): times, outputs rows, and the physical upper span's length from the
+    geometry of each row's sprocket angles (written apart from the model)."""
+    from chainmodel.kinematics.wrapping import chain_geometry
+    from chainmodel.outputs import OUTPUT_NAMES
+    sc = chainmodel.Scene.from_preset("xu2010", fidelity=level, input_speed_rpm=rpm,
+                                      ramp_time=0.0)
+    st = sc.stepper()
+    w = rpm * 2 * math.pi / 60.0
+    n = round(duration / h)
+    rows, t = [], []
+    for k in range(n):
+        tk = (k + 1) * h
+        rows.append(st.advance_held(tk, w * k * h, w, 0.0, load(k * h)).copy())
+        t.append(tk)
+    rows = np.array(rows)
+    ix = {name: i for i, name in enumerate(OUTPUT_NAMES)}
+    g = chain_geometry(sc.drive, rows[:, ix["driver.angle"]], rows[:, ix["driven.angle"]])
+    return np.array(t), rows, ix, g.upper.length, sc
+
+
+@pytest.mark.parametrize("level", [0, 1, 2])
+def test_a_load_rippling_through_zero_does_not_flip_the_roles(level):
+    """An independent audit's case: the FMU's default drive at 120 rpm (tooth period 20 ms)
+    with its load input 20 + 30 sin(2 pi 200 t) N m, crossing zero eight times a tooth period.
+    The roles follow the transmitted torque's mean over about a tooth period
+    (span_roles.filtered_torque), so the upper span stays the tight one (the load's mean is
+    positive), and the window's tight - slack is the driven sprocket's torque balance on the
+    mean load, 20 N m / R_o (R_o = p / (2 sin(pi / 17)), within 15 %; the labels had flipped
+    eight times a tooth period and the window's tight - slack was -100 N against +463 N)."""
+    def load(t):
+        return 20.0 + 30.0 * math.sin(2 * math.pi * 200.0 * t)
+    t, rows, ix, upper, sc = _stepped(level, load)
+    m = t >= 0.3
+    assert np.all(np.abs(rows[m, ix["tight_span.length"]] - upper[m]) < 1e-9)
+    r_o = 0.015875 / (2 * math.sin(math.pi / 17))
+    diff = np.mean(rows[m, ix["tight_span.tension"]] - rows[m, ix["slack_span.tension"]])
+    assert diff == pytest.approx(20.0 / r_o, rel=0.15)
+
+
+def test_a_slow_reversal_of_the_load_swaps_the_roles():
+    """A load reversing slowly, 150 sin(2 pi 2 t) N m (a 0.5 s period, 25 tooth periods): the
+    roles follow it, a tooth period or so behind - where the load has been positive for a few
+    tooth periods the upper span is tight, where negative the lower one - and the labelled
+    tight span is the more loaded one on average in each half (the torque balance's sign)."""
+    def load(t):
+        return 150.0 * math.sin(2 * math.pi * 2.0 * t)
+    t, rows, ix, upper, sc = _stepped(1, load, duration=0.5)
+    is_upper = np.abs(rows[:, ix["tight_span.length"]] - upper) < 1e-9
+    phase = (t % 0.5) / 0.5
+    assert np.all(is_upper[(phase > 0.1) & (phase < 0.4)])
+    assert not np.any(is_upper[(phase > 0.6) & (phase < 0.9)])
+    for sel in ((phase > 0.1) & (phase < 0.4), (phase > 0.6) & (phase < 0.9)):
+        assert np.mean(rows[sel, ix["tight_span.tension"]]
+                       - rows[sel, ix["slack_span.tension"]]) > 0.0
+
+
+def test_the_role_mean_is_part_of_the_steppers_state():
+    """get_state / set_state carry the running mean (the FMU's fmi2GetFMUstate): a stepper
+    restored mid-run names the same tight span as the one it was taken from."""
+    sc = chainmodel.Scene.from_preset("xu2010", fidelity=1, input_speed_rpm=120.0)
+    a = sc.stepper()
+    w = 4 * math.pi
+    for k in range(50):
+        a.advance_held((k + 1) * 1e-4, w * k * 1e-4, w, 0.0, -20.0 if k < 40 else 15.0)
+    state = a.get_state()
+    b = sc.stepper()
+    b.set_state(state)
+    assert b.role_torque == a.role_torque < 0.0
+    ra = a.advance_held(51e-4, w * 50e-4, w, 0.0, 15.0)
+    rb = b.advance_held(51e-4, w * 50e-4, w, 0.0, 15.0)
+    np.testing.assert_array_equal(ra, rb)

@@ -48,7 +48,9 @@ K_SIZE = 13
 C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL, C_FLOOR = range(8)
 #: each span's sag term times its stiffness, k_eff S [N^3] (torsional.sag_lag; 0: none)
 C_KS_UP, C_KS_LOW = 8, 9
-C_SIZE = 10
+#: the span roles' hold (span_roles.lower_tight): +1 upper tight, -1 lower, 0 from the inputs
+C_ROLE = 10
+C_SIZE = 11
 
 _EVENT_TOL = 1e-12   # chainmodel.kinematics.fourbar._EVENT_TOL
 
@@ -221,7 +223,7 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     t_up, t_low = split(C[C_SUM], C[C_FLOOR], up_start, low_end, load, C[C_KS_UP],
                         C[C_KS_LOW])
     tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
-    if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc):
+    if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc, C[C_ROLE]):
         tight = t_up
         slack = t_low
         length = g[0]

@@ -24,17 +24,20 @@ PARAM_FIELDS = (
     "reach2", "cj", "gap", "onset", "roller_radius", "pitch",
     "cut1", "cut_sl1", "cut_u1", "corner_sl1", "corner_u1",
     "cut2", "cut_sl2", "cut_u2", "corner_sl2", "corner_u2",
+    "role_hold",
 )
 (I_M, I_K, I_C, I_L0, I_KC, I_CC, I_DR, I_GX, I_GY, I_I1, I_I2, I_KR, I_CR, I_C2,
  I_CX, I_CY, I_R1, I_R2, I_PH1, I_PH2, I_TA1, I_TA2, I_SG1, I_CG1, I_SG2, I_CG2, I_TIP1, I_TIP2,
  I_PAPER_CONTACT, I_PAPER_DAMP, I_QF, I_RIGID, I_LMIN, I_LMAX, I_Z1, I_Z2, I_REACH1,
  I_REACH2, I_CJ, I_GAP, I_ONSET, I_RR, I_PITCH,
  I_CUT1, I_ASL1, I_AU1, I_KSL1, I_KU1,
- I_CUT2, I_ASL2, I_AU2, I_KSL2, I_KU2) = range(len(PARAM_FIELDS))
+ I_CUT2, I_ASL2, I_AU2, I_KSL2, I_KU2,
+ I_ROLE) = range(len(PARAM_FIELDS))
 # cut_s: 1 where sprocket s's flank reaches into the path of a roller articulating about its
 # seated neighbour (models.multibody.articulation_cut); cut_sl, cut_u: that neighbour's seat
 # centre and corner_sl, corner_u: the tooth's corner where the flank meets the path, both in
-# the seat frame (outward radial, tangential towards the neighbour)
+# the seat frame (outward radial, tangential towards the neighbour); role_hold: the span
+# roles' hold (span_roles.lower_tight: +1 upper tight, -1 lower, 0 from the inputs)
 #: P holds these scalars, then the tables cos(2 pi j / z1), sin(...) (j < z1), then the same
 #: for z2 (see :func:`pack_tables`): seat directions without trigonometry in the hot loop
 N_PARAMS = len(PARAM_FIELDS)

@@ -19,7 +19,8 @@ from ..outputs import (O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TENSION, O_CON
                        O_TIGHT_SPAN_LENGTH, O_TIGHT_SPAN_MIDSPAN_DEFLECTION, O_TIGHT_SPAN_TENSION,
                        O_TRANSMISSION_ERROR, O_VELOCITY_RATIO)
 from .multibody_forces import accelerations, forces_pass
-from .multibody_layout import (I_C2, I_CX, I_CY, I_DR, I_I2, I_R1, I_R2, I_RIGID, Workspace)
+from .multibody_layout import (I_C2, I_CX, I_CY, I_DR, I_I2, I_R1, I_R2, I_RIGID, I_ROLE,
+                               Workspace)
 from .span_roles import lower_tight
 
 __all__ = ["roller_engaged", "span_ends", "outputs_row", "fill_outputs", "engaged_numpy"]
@@ -111,7 +112,8 @@ def outputs_row(x, tau, tau_d, tau_dd, load, P, acc, tension, fcon, side, dist, 
     w1 = tau_d if rigid else v[0]
     # span roles by power flow, from the inputs (chainmodel.kernels.span_roles); ``reverse``
     # is kept in the signature for the callers
-    t_span = 1 if lower_tight(load, P[I_C2], P[I_I2], tooth_ratio, tau_d, tau_dd) else 0
+    t_span = 1 if lower_tight(load, P[I_C2], P[I_I2], tooth_ratio, tau_d, tau_dd,
+                              P[I_ROLE]) else 0
     s_span = 1 - t_span
     a = spans[t_span, 1]
     b = spans[t_span, 2]

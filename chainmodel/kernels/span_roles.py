@@ -16,9 +16,16 @@ the spans swap roles as DESIGN.md says). M is taken from the INPUTS only - w_2 a
 the tooth ratio times the input shaft's speed and acceleration - never from the state, so the
 role cannot flip with the tension oscillation inside a tooth period (near a torsional
 resonance the instantaneous larger tension alternates between the spans every cycle, which
-is why the old "larger tension" rule mixed the load with the oscillation). It changes only
-when the inputs reverse the transmitted torque: that is its hysteresis. At M = 0 exactly the
-span the driver winds on is tight (the upper one forward, the lower one in reverse). J_2 is
+is why the old "larger tension" rule mixed the load with the oscillation). At M = 0 exactly
+the span the driver winds on is tight (the upper one forward, the lower one in reverse).
+
+Inputs that themselves reverse M within a tooth period (a load input rippling through zero,
+as a co-simulated load can give) would flip the role with them. Where the inputs arrive step
+by step (the FMU, ``Stepper.advance`` with held inputs) the role therefore follows M's mean
+over about a driver tooth period: :func:`filtered_torque`, a first-order filter with that time
+constant, whose sign the kernels take through their role hold (``hold``: +1 upper, -1 lower,
+0 decided from the inputs at each evaluation, as a whole run's arrays are: their inputs are a
+ramp and a constant load). J_2 is
 the driven side's inertia as each level has it (levels 1-2: with the wrapped chain's share,
 ``torsional.chain_inertia``; levels 0 and 3: ``driven.inertia``); it matters only while the
 inputs accelerate and the load and damping torques are small.
@@ -29,11 +36,14 @@ vectorised twin.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._numba import jit
 
-__all__ = ["transmitted_torque", "lower_tight", "lower_tight_many"]
+__all__ = ["transmitted_torque", "lower_tight", "lower_tight_many", "filtered_torque",
+           "role_hold"]
 
 
 @jit
@@ -44,8 +54,13 @@ def transmitted_torque(load, damping, inertia, ratio, speed, acceleration):
 
 
 @jit
-def lower_tight(load, damping, inertia, ratio, speed, acceleration):
-    """True when the lower span is the tight one (module docstring)."""
+def lower_tight(load, damping, inertia, ratio, speed, acceleration, hold=0.0):
+    """True when the lower span is the tight one (module docstring); ``hold`` +1 / -1 names
+    the upper / lower span whatever the inputs (the filtered role of a stepped run)."""
+    if hold > 0.5:
+        return False
+    if hold < -0.5:
+        return True
     m = transmitted_torque(load, damping, inertia, ratio, speed, acceleration)
     if m > 0.0:
         return False
@@ -60,3 +75,27 @@ def lower_tight_many(load, damping, inertia, ratio, speed, acceleration):
         *(np.asarray(v, float) for v in (load, speed, acceleration)))
     m = load + ratio * (damping * speed + inertia * acceleration)
     return (m < 0.0) | ((m == 0.0) & (speed < 0.0))
+
+
+def filtered_torque(previous: float, torque: float, dt: float, speed: float,
+                    n_driver: int) -> float:
+    """The transmitted torque's running mean after a step of ``dt`` [s] that ends at
+    ``torque`` (held over the step): a first-order filter whose time constant is one driver
+    tooth period at the input speed, 2 pi / (n_driver |speed|), exact for an input held over the
+    step; at rest (speed 0) it keeps ``previous`` (no tooth passes)."""
+    if not math.isfinite(previous):
+        return torque
+    if speed == 0.0 or dt <= 0.0:
+        return previous
+    tau = 2.0 * math.pi / (n_driver * abs(speed))
+    return torque + (previous - torque) * math.exp(-dt / tau)
+
+
+def role_hold(mean_torque: float, speed: float) -> float:
+    """+1 (upper span tight) or -1 (lower) from the filtered torque's sign; at 0 the span the
+    driver winds on (:func:`lower_tight`'s tie)."""
+    if mean_torque > 0.0:
+        return 1.0
+    if mean_torque < 0.0:
+        return -1.0
+    return -1.0 if speed < 0.0 else 1.0

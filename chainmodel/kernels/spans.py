@@ -221,11 +221,13 @@ P_INV_J22, P_INV_DET = 36, 37   # 1 / J22 and 1 / (J11 J22 - J12^2) of the const
 P_LAG, P_LAG_QS = 38, 39
 #: the lag's rate as a share of the span's first string frequency (LAG_RATE)
 P_LAG_RATE = 40
+#: the span roles' hold (span_roles.lower_tight): +1 upper tight, -1 lower, 0 from the inputs
+P_ROLE = 41
 #: the share of level 1's lag rate the step rule counts as a frequency: a decay needs fewer
 #: steps than an oscillation of its rate (RK4 is stable on it to h lambda = 2.785, and the
 #: state only follows its target); at the default tolerance (h w = 0.507) h lambda <= 2
 LAG_SHARE = 0.25
-P_SIZE = 41
+P_SIZE = 42
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
@@ -645,7 +647,7 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     aux[A_MID_LOW] = mid_l
     # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
     aux[A_LOWER_TIGHT] = 1.0 if lower_tight(load, P[P_D2], P[P_J22], G[9] / G[10], w_in,
-                                            a_in) else 0.0
+                                            a_in, P[P_ROLE]) else 0.0
 
 
 @jit

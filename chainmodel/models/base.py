@@ -270,6 +270,22 @@ class Model(ABC):
         """Extra arrays for plots (e.g. roller positions); empty by default."""
         return {}
 
+    # --- span roles (chainmodel.kernels.span_roles) ------------------------------------------
+    def role_constants(self) -> tuple[float, float, float]:
+        """(c_2 [N m s/rad], J_2 [kg m^2], z1 / z2) of the transmitted torque M = load +
+        (z1 / z2) (c_2 w_in + J_2 a_in) that names the tight span (span_roles.
+        transmitted_torque; J_2 as this level has it: ``driven.inertia`` unless overridden)."""
+        p = self.params
+        return (float(p["driven.damping"]), float(p["driven.inertia"]),
+                float(self.drive.tooth_ratio))
+
+    def hold_role(self, hold: float) -> None:
+        """Name the tight span in this level's outputs until told otherwise: +1 the upper span,
+        -1 the lower, 0 from the inputs at each evaluation (span_roles.lower_tight). A stepper
+        taking inputs step by step holds the role its filtered transmitted torque names
+        (chainmodel.integrate, span_roles.filtered_torque). Levels with compiled outputs
+        override it; here nothing to hold (outputs() decides from the inputs)."""
+
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N] (what the centre distance and
         pre-strain give this level); nan where not defined."""

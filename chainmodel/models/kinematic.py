@@ -253,11 +253,16 @@ class KinematicModel(Model):
                                               p["driven.damping"])
         C[KK.C_SUM], C[KK.C_FLOOR] = self._raw_sum, self._floor
         C[KK.C_KS_UP], C[KK.C_KS_LOW] = self._sag_ks
+        C[KK.C_ROLE] = 0.0         # span roles from the inputs (hold_role)
         C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
                                                           * math.cos(p["drive.inclination"]))
         C[KK.C_RATIO] = d.tooth_ratio
         C[KK.C_CENTRIFUGAL] = float(centrifugal_tension(d, p, 1.0))   # times speed^2
         return KK.fourbar_constants(d), geometry_constants(d), C
+
+    def hold_role(self, hold: float) -> None:
+        from ..kernels import kinematic as KK
+        self._kernel_constants[2][KK.C_ROLE] = float(hold)
 
     def outputs_into(self, t, x, angle, speed, acceleration, torque, out) -> None:
         """Every output (ALL_OUTPUTS order) into ``out``: the scalar compiled twin of

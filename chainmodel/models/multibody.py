@@ -210,6 +210,7 @@ class MultibodyModel(Model):
         for key, teeth, R, tip in (("reach1", drive.n_driver, drive.driver.pitch_radius, g1[2]),
                                    ("reach2", drive.n_driven, drive.driven.pitch_radius, g2[2])):
             vals[key] = (R + max(tip, 0.1 * pitch)) / math.cos(math.pi / teeth) + clearance
+        vals["role_hold"] = 0.0          # span roles from the inputs (Model.hold_role)
         self.P = K.pack_tables(np.array([vals[f] for f in K.PARAM_FIELDS], float))
         self.flank = {"gamma_driver": g1[0], "gamma_driven": g2[0], "tip_driver": g1[2],
                       "tip_driven": g2[2], "clearance": clearance,
@@ -325,6 +326,9 @@ class MultibodyModel(Model):
             return True
         links = (max(self._n_upper, 1), max(self._n_lower, 1))
         return max(2.0 * k / n * s / tension ** 3 for s, n in zip(sags, links)) > SAG_START
+
+    def hold_role(self, hold: float) -> None:
+        self.P[K.I_ROLE] = float(hold)
 
     def straight_layout(self, u: Inputs) -> np.ndarray:
         """At rest, the chain wrapped with straight spans (kinematics.wrapping.roller_positions)

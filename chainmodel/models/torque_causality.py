@@ -163,6 +163,12 @@ class TorqueCausalModel(Model):
                                    "and the driver, k_r (theta_m - phi1) + c_r (w_m - w1)")
         return d
 
+    def role_constants(self) -> tuple[float, float, float]:
+        return self.inner.role_constants()
+
+    def hold_role(self, hold: float) -> None:
+        self.inner.hold_role(hold)
+
     def switching_functions(self, t, x, u):
         xi, ui = self._inner_inputs(x, u)
         return self.inner.switching_functions(t, xi, ui)

@@ -358,6 +358,15 @@ class TorsionalModel(Model):
         aux = self._eval(t, np.asarray(x, float), u)[1]
         return float(L.omega_estimate(aux, self.G, self.P, self.loop_constants))
 
+    # --- span roles ------------------------------------------------------------------------
+    def role_constants(self) -> tuple[float, float, float]:
+        """Model.role_constants with this level's J_2 (the wrapped chain's share in it, as
+        the kernel's role takes it)."""
+        return float(self.P[S.P_D2]), float(self.P[S.P_J22]), float(self.drive.tooth_ratio)
+
+    def hold_role(self, hold: float) -> None:
+        self.P[S.P_ROLE] = float(hold)
+
     # --- capabilities ----------------------------------------------------------------------
     def static_tension(self) -> float:
         """Static span tension at rest with no load [N], the drive's (driver at angle 0; with
