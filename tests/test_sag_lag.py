@@ -9,7 +9,8 @@
   the tangent of T^3 - T_raw T^2 - k S = 0), while with the sag frozen (faster than it
   follows) it is the elastic one: the mode sees the links, the mean sees the sag;
 * the sag's state relaxes at the span's first string frequency pi / L sqrt(T / rho) (a taut
-  string's, seed 004 eq 61 at rest);
+  string's, seed 004 eq 61 at rest), and after a load step a slack span hangs on its new sag
+  within a few tenths of a second, as level 3's does, not seconds;
 * plain and compiled kernels agree on it (tests/test_twins.py runs the levels both ways).
 """
 
@@ -126,11 +127,10 @@ def test_slow_stiffness_is_ernsts_and_fast_the_elastic(tmp_path, wrap):
     assert abs(fast) > 1.5 * abs(slow)
 
 
-def test_the_sag_relaxes_at_an_eighth_of_the_first_string_frequency(tmp_path):
-    """d(dr/dt)/dr at rest is -(1/8) pi / L sqrt(T / rho): the sag follows the span at an
-    eighth of its first string frequency (the span's tooth-period-mean length L, its tension
-    at rest, rho its mass per length, written here; why an eighth: spans.LAG_RATE); at rest r
-    is the span's elastic tension and still."""
+def test_the_sag_relaxes_at_the_first_string_frequency(tmp_path):
+    """d(dT_q/dt)/dT_q at rest is -pi / L sqrt(T / rho): the sag follows the span at its first
+    string frequency (the span's tooth-period-mean length L, its tension at rest, rho its mass
+    per length, written here; spans.LAG_RATE); at rest the sag has followed and is still."""
     m = _sagging_model(tmp_path)
     u = Inputs(0.0, 0.0, 0.0)
     x0 = m.initial_state(u)
@@ -144,7 +144,7 @@ def test_the_sag_relaxes_at_an_eighth_of_the_first_string_frequency(tmp_path):
         xp[k] += h
         xm[k] -= h
         rate = (m.rhs(0.0, xp, u)[k] - m.rhs(0.0, xm, u)[k]) / (2 * h)
-        assert rate == pytest.approx(-math.pi / length * math.sqrt(t / rho) / 8.0, rel=1e-5)
+        assert rate == pytest.approx(-math.pi / length * math.sqrt(t / rho), rel=1e-5)
         assert abs(m.rhs(0.0, x0, u)[k]) < 1e-9 * t      # at rest it has followed
 
 
@@ -167,3 +167,51 @@ def test_without_gravity_or_with_the_option_off_there_is_no_lag_state(tmp_path):
     m = _sagging_model(tmp_path, torsional_sag_lag=False)
     assert not m.lag and m.n_states == 4 and m.second_order
     assert _sagging_model(tmp_path).n_states == 6
+
+
+def test_a_load_step_is_followed_within_tenths_of_a_second(tmp_path):
+    """An independent audit's 10B 17/34 drive with no pretension at 400 rpm, its load stepped
+    from 30 to 90 N m at 1 s through the stepper: level 3's slack span carries 34-40 N within
+    0.1 s. Level 1's sag follows at the spans' string frequency: over 0.2-0.5 s after the step
+    its slack span is within 20 % of its own constant-90-N m run (at an eighth of that
+    frequency it stayed at 3.6 N for half a second and took seconds), and it never drops to
+    zero while it does."""
+    import chainmodel
+    from chainmodel.new_scene import scene_text
+    text = scene_text(driver_teeth=17, driven_teeth=34, chain="10B", speed_rpm=400.0,
+                      load_torque=30.0, static_tension=0.0)
+    path = tmp_path / "step.toml"
+    path.write_text(text)
+    sc = load_scene(str(path), fidelity=1)
+    st = sc.stepper()
+    dt, rows = 1e-4, []
+    for i in range(1, 15001):
+        t = i * dt
+        u = sc.inputs(t - dt)
+        out = st.advance(t, Inputs(u.angle, u.speed, 30.0 if t - dt < 1.0 else 90.0,
+                                   u.acceleration))
+        rows.append((t, out["slack_span.tension"]))
+    rows = np.array(rows)
+    const = chainmodel.simulate(str(path), fidelity=1, duration=1.5, load_torque=90.0)
+    target = float(np.mean(const["slack_span.tension"][const.time >= 1.0]))
+    after = rows[(rows[:, 0] >= 1.2) & (rows[:, 0] < 1.5), 1]
+    assert float(np.mean(after)) == pytest.approx(target, rel=0.2)
+    assert float(np.min(rows[rows[:, 0] >= 1.0, 1])) > 0.0
+
+
+
+def test_a_sag_tension_through_zero_is_reported_not_returned(tmp_path):
+    """T_q <= 0 has no meaning (the sag term k S / T_q^2 is unbounded there): the model's check
+    refuses the state, naming the span and the option, where before a step that outran the
+    lag's rate returned tensions of 1e24 N (C1 at a sudden 400 rpm through 10 ms
+    communication steps; tests/test_step_independence.py now runs it)."""
+    from chainmodel.models.base import SimulationDiverged
+    m = _sagging_model(tmp_path)
+    x = m.initial_state(Inputs(0.0, 0.0, 0.0)).copy()
+    k = m.n_states - 2
+    m.check(0.0, x)
+    x[k + 1] = -3.0
+    with pytest.raises(SimulationDiverged, match="lower span's sag tension.*sag_lag"):
+        m.check(0.1, x)
+    with pytest.raises(SimulationDiverged, match="lower span"):
+        m.check_states(np.array([0.0, 0.1]), np.vstack([x, x]))

@@ -16,6 +16,7 @@ name            in rk4_loop (levels 1-2 kernel)     here (any Model)
 ``_omega_at``   ``omega_estimate``                  ``model.omega_at``
 ``_event_step`` a quarter tooth period              ``model.event_step``
 ``_after_step`` finite check                        ``model.check`` (raises the model's sentence)
+``_step_kept``  ``spans.lag_step_kept``             ``model.step_kept``
 ``_step_from``  ``_rk4_from``                       ``_rk4_from`` or ``_verlet_from`` (method)
 ==============  ==================================  ============================================
 
@@ -75,6 +76,10 @@ def _after_step(t, x, c, P, Q):
     return rk4_loop.STATUS_OK if np.all(np.isfinite(x)) else rk4_loop.STATUS_NONFINITE
 
 
+def _step_kept(x, xn, c, P):
+    return c.model.step_kept(x, xn)
+
+
 def _plain(fn):
     return getattr(fn, "py_func", fn)
 
@@ -88,7 +93,7 @@ def _build(method: str):
         namespace[name] = types.FunctionType(f.__code__, namespace, name, f.__defaults__,
                                              f.__closure__)
     namespace.update(_rhs_at=_rhs_at, _switch=_switch, _omega_at=_omega_at,
-                     _event_step=_event_step, _after_step=_after_step)
+                     _event_step=_event_step, _after_step=_after_step, _step_kept=_step_kept)
     namespace["_step_from"] = namespace["_rk4_from" if method == "rk4" else "_verlet_from"]
     return namespace["_interval"]
 

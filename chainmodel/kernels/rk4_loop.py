@@ -33,7 +33,10 @@ the communication step (four seating and release events per tooth period; a step
 the first event inside it). A communication step is split into m = ceil(H / h_max) equal steps;
 after every step w is estimated again from the step's end (the evaluation the next step starts
 with, so it costs nothing) and if the step now exceeds h_max the rest of the communication step
-is split again (the stable-step guard). An explicit step with h w above RK4's stability limit
+is split again (the stable-step guard). A step that outran the rule's estimate at its start
+(:func:`_step_kept`: level 1's lagged sag moved by more than a factor of two, a span gone slack
+inside the step) is retried at a quarter of its length, up to MAX_RETRIES times; the retries'
+evaluations count, the steps do not. An explicit step with h w above RK4's stability limit
 2 sqrt(2) is refused (status STATUS_UNSTABLE) instead.
 
 **Steps spanning points** (level 1, a run through many points: :func:`_span_step`). Where
@@ -79,7 +82,7 @@ from ..outputs import (N_OUTPUTS, O_CHAIN_MAX_LINK_TENSION, O_CHAIN_MIN_LINK_TEN
 from .spans import (A_ACC2, A_G_UP, A_L_LOW, A_L_UP, A_MID_LOW, A_MID_UP, A_PHI1, A_SIZE,
                     A_T_LOW, A_T_UP, A_TAU_IN, A_W1, P_LBAR_L, P_LBAR_U, P_MODES, P_PITCH,
                     P_RHOA, P_RIGID, evaluate, evaluate_rate)
-from .spans import A_LAG_W, A_LOWER_TIGHT, P_LAG
+from .spans import A_LAG_W, A_LOWER_TIGHT, P_LAG, lag_index, lag_step_kept
 
 __all__ = ["C_SIZE", "CF_SIZE", "Q_SIZE", "advance_points", "advance_held", "outputs_into",
            "outputs_many", "omega_estimate", "fill_outputs", "EVENT_TOL", "EVENT_GAP",
@@ -478,14 +481,16 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
     h_event = _event_step(c, Q)
     fixed = cfg[CF_STEP] > 0.0
     h = 0.0
+    retries = 0
     while t < t1:
-        w = _omega_at(t, x, aux, c, G, P, Q)
-        if fixed:
-            if cfg[CF_STEP] * w > cfg[CF_LIMIT]:
-                return STATUS_UNSTABLE, steps, events, evals, t, w
-            h_max = cfg[CF_STEP]
-        else:
-            h_max = _step_bound(w, h_event, cfg)
+        if retries == 0:
+            w = _omega_at(t, x, aux, c, G, P, Q)
+            if fixed:
+                if cfg[CF_STEP] * w > cfg[CF_LIMIT]:
+                    return STATUS_UNSTABLE, steps, events, evals, t, w
+                h_max = cfg[CF_STEP]
+            else:
+                h_max = _step_bound(w, h_event, cfg)
         rest = t1 - t
         if h == 0.0 or h > h_max or h > rest:
             # first step, the guard, or round-off at the end: split the rest evenly
@@ -498,8 +503,16 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
             t_next = t + h
         # k1 = f(t, x): the previous evaluation at this (t, x), the switch at the step end
         e = _step_from(t, x, h, c, G, P, k1, k2, k3, k4, tmp, aux, xn)
+        evals += e
+        if retries < MAX_RETRIES and not _step_kept(x, xn, c, P):
+            # the step outran the rule's estimate at its start (_step_kept): again, shorter;
+            # k1 still holds f(t, x), so only the stages are redone
+            h *= 0.25
+            retries += 1
+            continue
+        retries = 0
         _switch(t_next, xn, c, G, P, f1, aux, g1)
-        evals += e + 1
+        evals += 1
         if _changed(g1, g0):
             s, e = _cross(t, x, h, t_next, c, G, P, W, V, aux)
             evals += e
@@ -516,6 +529,19 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
         if _after_step(t, x, c, P, Q) != STATUS_OK:
             return STATUS_NONFINITE, steps, events, evals, t, 0.0
     return STATUS_OK, steps, events, evals, t, 0.0
+
+
+#: how often a step is retried shorter (each a quarter of the last) before it is taken anyway
+#: and the state's own checks judge it
+MAX_RETRIES = 6
+
+
+@jit_noalloc
+def _step_kept(x, xn, c, P):
+    """False when the step from x to xn outran the step rule's estimate at its start and is
+    retried shorter: level 1's lagged sag moved by more than a factor of two
+    (:func:`chainmodel.kernels.spans.lag_step_kept`)."""
+    return lag_step_kept(x, xn, P)
 
 
 @jit_noalloc
@@ -615,7 +641,13 @@ def outputs_many(X, th, w, acc, load, G, P, Q, OUT):
 
 @jit_noalloc
 def _check(x, P, Q):
-    """STATUS_AMPLITUDE when a span mode's amplitude exceeds Q_AMP_LIMIT (ModalModel.check)."""
+    """STATUS_AMPLITUDE when a span mode's amplitude exceeds Q_AMP_LIMIT (ModalModel.check);
+    STATUS_NONFINITE when level 1's lagged sag tension is not positive (TorsionalModel.check:
+    its sag term k S / T_q^2 is then meaningless)."""
+    if P[P_LAG] > 0.5:
+        k = lag_index(P)
+        if not (x[k] > 0.0 and x[k + 1] > 0.0):
+            return STATUS_NONFINITE
     n = int(P[P_MODES])
     if n > 0:
         base = 2 if P[P_RIGID] > 0.5 else 4
@@ -713,7 +745,7 @@ def _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
         h = times[j] - t0
         made += _step_from(t0, x, h, c, G, P, k1, W[4], W[5], W[6], W[7], aux, xn) + 1
         _switch(times[j], xn, c, G, P, f1, aux, V[1])
-        if (_after_step(times[j], xn, c, P, Q) != STATUS_OK
+        if (_after_step(times[j], xn, c, P, Q) != STATUS_OK or not _step_kept(x, xn, c, P)
                 or h > _step_bound(_omega_at(times[j], xn, aux, c, G, P, Q),
                                    _event_step(c, Q), cfg)):
             c[C_SEG_BLOCK] = j

@@ -207,12 +207,16 @@ P_SAGC_U, P_SAGC_L = 30, 31  # (S k_eff)^(1/3) [N] at the tooth-period-mean link
 # k_eff [N/m] and c_link / n [N s/m] of each span at its tooth-period-mean link count
 # (torsional.mean_link_compliance: constant, so computed once; 0: from the current count)
 P_KEFF_U, P_KEFF_L, P_CN_U, P_CN_L = 32, 33, 34, 35
-#: level 1's lagged sag relaxes at this share of the span's first string frequency: a first-
-#: order lag dissipates near its corner, and at the string frequency itself it more than
-#: doubled C1's torsional damping (its mode, 24 Hz, lies just above its spans' string modes:
-#: 0.45 -> 1.26 % of critical, level 3 0.47 %); at an eighth 0.74 % (level 2 0.68 %), while the
-#: sag's mean still follows within about eight string periods (0.1-0.2 s); docs/reduced_models.md
-LAG_RATE = 0.125
+#: level 1's lagged sag relaxes at this share of the span's first string frequency. The string
+#: frequency itself: an independent audit found that at an eighth of it a slack span took
+#: seconds to hang on its new sag after a load step (a 10B drive stepped from 30 to 90 N m:
+#: 3.6 N for half a second where level 3 carries 34-40 N within 0.1 s; here 0.2-0.5 s) and a
+#: drive near a resonance (08B 11/45 at 1000 rpm) settled in two different states after a load
+#: step and at a constant load. Its cost: a first-order lag dissipates near its corner, so a
+#: torsional mode lying just above its spans' string modes is damped more (C1's 24 Hz mode:
+#: 1.26 % of critical against 0.45 % without the lag and level 3's 0.47 %; on eight other
+#: drives the lag moves the damping by less than 0.1 point); docs/reduced_models.md
+LAG_RATE = 1.0
 P_INV_J22, P_INV_DET = 36, 37   # 1 / J22 and 1 / (J11 J22 - J12^2) of the constant mass matrix
 #: level 1's lagged sag (torsional.sag_lag): 1 when each straight span's sag follows its
 #: stretch through a state (the tension T_q its sag hangs at, :func:`_lagged`), 0 otherwise;
@@ -350,7 +354,8 @@ def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lba
     Where a span dips slack within a tooth its T_q moves fast relative to itself; the step
     rule counts that relative rate (the fourth value), so no stage takes T_q below zero (the
     first version, at the full string frequency and without it, put an unbounded sag into C1
-    at a sudden 400 rpm: 1e26 N). The span carries T = softplus(raw + k S / T_q^2, floor):
+    at a sudden 400 rpm: 1e26 N), and a step whose span went slack after its start, moving
+    T_q by more than a factor of two, is retried shorter (:func:`lag_step_kept`). The span carries T = softplus(raw + k S / T_q^2, floor):
     slowly, the quasi-static elastic catenary (the static sag, a slack span hanging on its sag
     tension under load); well above lambda the sag is frozen and the span is elastic (the
     torsional mode above the spans' string modes, which the static sag's softness would pull
@@ -378,6 +383,31 @@ def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lba
     # it (rk4_loop.omega_estimate: a step then moves T_q by at most h w of itself)
     speed = abs(dtq) / tq
     return t, tq, dtq, (LAG_SHARE * rate if LAG_SHARE * rate > speed else speed)
+
+
+@jit_noalloc
+def lag_index(P):
+    """Index of the upper span's sag tension T_q in the state (the lower span's follows it):
+    after the sprockets' states (2 rigid, 4 elastic) and any span modes' (4 per mode)."""
+    return (2 if P[P_RIGID] > 0.5 else 4) + 4 * int(P[P_MODES])
+
+
+@jit_noalloc
+def lag_step_kept(x, xn, P):
+    """False when a step took a span's sag tension T_q (level 1's lagged sag) to below half or
+    above twice its value at the step's start: the step rule's rate (:func:`_lagged`) is the
+    start's, and a span going slack within the step can drive an RK4 stage of T_q through
+    zero, after which its sag term k S / T_q^2 is unbounded (C1 started suddenly at 400 rpm
+    through the FMU at 2-10 ms communication steps: 1e24 N). The loop then retries the step
+    at a quarter of its length (rk4_loop._interval); a step the rule bounds moves T_q by at
+    most h w = 0.5 of itself, so this only catches the rule's start-of-step estimate failing."""
+    if P[P_LAG] < 0.5:
+        return True
+    k = lag_index(P)
+    for i in range(k, k + 2):
+        if not (0.5 * x[i] <= xn[i] <= 2.0 * x[i]):
+            return False
+    return True
 
 
 @jit_noalloc
@@ -538,8 +568,8 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
     else:
         ke_l, cn_l = span_stiffness(nl, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C])
     if P[P_LAG] > 0.5:
-        # level 1's lagged sag: states r_up, r_low after the sprockets' (and any modes')
-        lag = base + 4 * n
+        # level 1's lagged sag: states T_q,up, T_q,low after the sprockets' (and any modes')
+        lag = lag_index(P)
         qs = P[P_LAG_QS] > 0.5
         rho = P[P_RHOA]
         t_u, g_u, q_u, dx[lag], w_u = _tension_lagged(

@@ -193,6 +193,12 @@ class Model(ABC):
         bound 1 / stable_step(x)."""
         return 1.0 / self.stable_step(x)
 
+    def step_kept(self, x: np.ndarray, x_next: np.ndarray) -> bool:
+        """False when the fixed step from x to x_next outran the step rule's estimate at its
+        start and is to be retried shorter (chainmodel.kernels.rk4_loop._interval); by default
+        every step is kept."""
+        return True
+
     def event_step(self, speed: float) -> float:
         """Largest fixed step that resolves the switching functions' sign changes one at a
         time when the driver turns at ``speed`` [rad/s]; inf for a model without events."""

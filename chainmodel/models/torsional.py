@@ -51,7 +51,8 @@ from ..kernels import rk4_loop as L
 from ..kernels import spans as S
 from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
-from .base import ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, centrifugal_tension
+from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
+                   centrifugal_tension)
 from .static_tension import seat_series_compliance, seat_stiffness
 from .wrap_statics import (held_span_tension, honoured, span_ends, span_sag_terms,
                            straight_span_sags,
@@ -358,6 +359,11 @@ class TorsionalModel(Model):
         aux = self._eval(t, np.asarray(x, float), u)[1]
         return float(L.omega_estimate(aux, self.G, self.P, self.loop_constants))
 
+    def step_kept(self, x: np.ndarray, x_next: np.ndarray) -> bool:
+        """False when a step moved level 1's lagged sag by more than a factor of two
+        (:func:`~chainmodel.kernels.spans.lag_step_kept`)."""
+        return bool(S.lag_step_kept(np.asarray(x, float), np.asarray(x_next, float), self.P))
+
     # --- span roles ------------------------------------------------------------------------
     def role_constants(self) -> tuple[float, float, float]:
         """Model.role_constants with this level's J_2 (the wrapped chain's share in it, as
@@ -513,9 +519,26 @@ class TorsionalModel(Model):
         out = self.outputs_many(np.asarray(times, float), states, *arrays)
         return {o.name: out[o.name] for o in ALL_OUTPUTS}
 
+    def check(self, t: float, x: np.ndarray) -> None:
+        """The finite check, and level 1's lagged sag tensions positive: a step that took one
+        through zero (faster than the step rule's rate) has no meaning."""
+        super().check(t, x)
+        if self.lag:
+            k = S.lag_index(self.P)
+            for name, value in zip(("upper", "lower"), x[k:k + 2]):
+                if not value > 0.0:
+                    raise SimulationDiverged(
+                        f"{self.name} model diverged at t = {t:.6g} s: the {name} span's sag "
+                        f"tension (torsional.sag_lag's state) fell to {value:.3g} N, a step "
+                        "faster than its rate; try a smaller solver.tolerance or solver.step, "
+                        "or torsional.sag_lag = false")
+
     def check_states(self, times, states) -> None:
         """:meth:`check` for many states (vectorised): raises for the first that fails."""
         bad = ~np.all(np.isfinite(states), axis=1)
+        if self.lag:
+            k = S.lag_index(self.P)
+            bad |= ~np.all(states[:, k:k + 2] > 0.0, axis=1)
         if bad.any():
             i = int(np.argmax(bad))
             self.check(float(times[i]), states[i])
