@@ -212,8 +212,10 @@ def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
     return [Problem("wrap_statics_unavailable", (
         f"torsional.wrap_statics = true was not honoured: level 3's statics give this drive "
         f"no wrap to fit ({why}), so levels 0-2 hold their span ends with the seat ladder "
-        f"(torsional.seat_compliance) and the catenary instead; run level 3 where the "
-        f"torsional mode matters (docs/reduced_models.md, \"Where the fit is refused\")"))]
+        f"(torsional.seat_compliance) and the catenary instead; where the chain hangs on its "
+        f"sag their slack span under load reads low (nothing holds it up but a sag the "
+        f"parabola may not cover); run level 3 where the torsional mode or the slack span "
+        f"matters (docs/reduced_models.md, \"Where the fit is refused\")"))]
 
 
 def _length_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:
