@@ -93,3 +93,19 @@ def test_internal_step_does_not_follow_the_communication_step():
     for k in range(3):
         st.advance_held((k + 1) * 1e-2, 0.13 * k, 13.0, 0.0, 43.2)
     assert st.stats["steps"] >= 1.9 * counts[1e-2]        # (1/16)^(1/4) = 1/2 the step
+
+
+def test_a_state_the_model_refuses_is_refused_at_any_communication_step():
+    """Level 2 on seed 004's A2 drive, its input shaft jumping to 400 rpm: a span's transverse
+    amplitude leaves the string model's range (ModalModel.check) within 0.3 s. The 0.1 ms run
+    refuses it, and so must a run through 10 and 50 ms communication steps: the check runs
+    after every internal step, not only at communication points (at 50 ms it passed through
+    and returned a tight span of 17 kN where level 1 carries 55 N)."""
+    from chainmodel.models.base import SimulationDiverged
+    scene = chainmodel.Scene.from_preset("A2", fidelity=2)
+    speed, load = 41.9, scene.operating.load_torque
+    for h in (1e-4, 1e-2, 5e-2):
+        st = scene.stepper()
+        with pytest.raises(SimulationDiverged, match="transverse amplitude"):
+            for k in range(round(DURATION / h)):
+                st.advance_held((k + 1) * h, speed * k * h, speed, 0.0, load)

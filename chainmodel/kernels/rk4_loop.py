@@ -458,7 +458,8 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
     functions in V[0].
 
     Returns (status, steps, events, rhs_evaluations, t, omega): status STATUS_OK, or
-    STATUS_NONFINITE (stopped after the step that left a non-finite state, at time t) or
+    :func:`_after_step`'s (STATUS_NONFINITE or STATUS_AMPLITUDE: stopped after the step that
+    left the model's range, at time t, its state in ``x``) or
     STATUS_UNSTABLE (an explicit step above the stable limit of the state at t, nothing done
     from there; omega the frequency estimate there)."""
     n = x.size
@@ -526,8 +527,9 @@ def _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, log_at, log_cap, start
             k1[i] = f1[i]
         for i in range(g0.size):
             g0[i] = g1[i]
-        if _after_step(t, x, c, P, Q) != STATUS_OK:
-            return STATUS_NONFINITE, steps, events, evals, t, 0.0
+        status = _after_step(t, x, c, P, Q)
+        if status != STATUS_OK:
+            return status, steps, events, evals, t, 0.0
     return STATUS_OK, steps, events, evals, t, 0.0
 
 
@@ -559,11 +561,15 @@ def _event_step(c, Q):
 
 @jit_noalloc
 def _after_step(t, x, c, P, Q):
-    """STATUS_NONFINITE when the state after a step is not finite, else STATUS_OK."""
+    """STATUS_NONFINITE when the state after a step is not finite, else :func:`_check`'s status
+    (a span mode's amplitude beyond the string model, a lagged sag tension not positive): every
+    step, as the plain loop's ``model.check``, so a state that leaves the model's range between
+    two communication points is caught there too (level 2 at 50 ms communication steps
+    otherwise passed through it and returned a state its 0.1 ms run refuses)."""
     for i in range(x.size):
         if not math.isfinite(x[i]):
             return STATUS_NONFINITE
-    return STATUS_OK
+    return _check(x, P, Q)
 
 
 @jit_noalloc
@@ -868,8 +874,8 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
     there: angle, speed, acc, load; cubic Hermite inside each step, module docstring), leaving
     ``x_in`` untouched and the state at the last point reached in ``x_out``: this level's
     instance of :func:`chainmodel.kernels.stepping.points` (its docstring: OUT, states, log,
-    the result). Status as :func:`_interval`, or STATUS_AMPLITUDE (checked at each point) or
-    STATUS_OUTPUTS."""
+    the result). Status as :func:`_interval` (which checks every step), or STATUS_AMPLITUDE
+    (checked at each point too) or STATUS_OUTPUTS."""
     K = (G, P, Q)
     return _points(x_in, x_out, times, angle, speed, acc, load, K, _begin(K, x_in.size), cfg, OUT,
                    states, log, log_cap)
