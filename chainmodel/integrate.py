@@ -106,7 +106,10 @@ class Stepper(ABC):
         #: the tight span where inputs arrive step by step (span_roles.filtered_torque; nan:
         #: not started, the roles then follow the inputs)
         self.role_torque = math.nan
-        self._role = (*model.role_constants(), float(model.drive.n_driver), 0.0)
+        #: (c_2, J_2, z1 / z2, z1) of the transmitted torque and its filter, and the role the
+        #: model holds now (+1 / -1, 0: from the inputs)
+        self._role_constants = (*model.role_constants(), float(model.drive.n_driver))
+        self._held_role = 0.0
         model.hold_role(0.0)
         #: times at which the last (up to 1000) switching events were located
         self.event_log: deque = deque(maxlen=1000)
@@ -221,7 +224,7 @@ class Stepper(ABC):
         hold = (0.0 if math.isnan(self.role_torque) else
                 role_hold(self.role_torque, state.inputs.speed))
         self.model.hold_role(hold)
-        self._role = self._role[:4] + (hold,)
+        self._held_role = hold
 
     def _hold_role(self, t_end, speed, acceleration, torque) -> float:
         """Advance the running mean of the transmitted torque to ``t_end`` with the inputs held
@@ -230,21 +233,21 @@ class Stepper(ABC):
         tooth period; docs/stability.md, "Tight and slack span"). Returns the mean before the
         step (restored if the step fails)."""
         saved = self.role_torque
-        damping, inertia, ratio, teeth, held = self._role
+        damping, inertia, ratio, teeth = self._role_constants
         m = torque + ratio * (damping * speed + inertia * acceleration)
         self.role_torque = filtered_torque(saved, m, t_end - self.t, speed, teeth)
         hold = role_hold(self.role_torque, speed)
-        if hold != held:
+        if hold != self._held_role:
             self.model.hold_role(hold)
-            self._role = (damping, inertia, ratio, teeth, hold)
+            self._held_role = hold
         return saved
 
     def _release_role(self) -> None:
         """Roles from the inputs at each evaluation (whole runs' arrays, callable sources)."""
         self.role_torque = math.nan
-        if self._role[4] != 0.0:
+        if self._held_role != 0.0:
             self.model.hold_role(0.0)
-            self._role = self._role[:4] + (0.0,)
+            self._held_role = 0.0
 
     def refuse_bad_inputs(self, angle, speed, torque) -> None:
         """The one place where inputs are checked before a step: raise ValueError with the

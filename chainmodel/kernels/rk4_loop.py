@@ -785,7 +785,7 @@ def _span_step(i, x, times, angle, speed, acc, load, G, P, Q, cfg, c, W, V, aux)
 @jit_inline
 def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_cap):
     """Communication step i of :func:`stepping.points`: :func:`_interval` on the cubic Hermite
-    of the inputs at both ends, then the span modes' amplitude check; or, inside a step spanning
+    of the inputs at both ends (which checks every step's state); or, inside a step spanning
     several points (:func:`_span_step`), that step's dense output at the point."""
     G, P, Q = K
     c, W, V, aux, flags = S
@@ -825,10 +825,8 @@ def _advance(i, x, times, angle, speed, acc, load, K, cfg, S, log, logged, log_c
     status, m, e, v, t_st, w = _interval(x, t0, t1, c, G, P, Q, cfg, W, V, aux, log, logged,
                                         log_cap, started)
     v += made
-    if status == STATUS_OK:
-        status = _check(x, P, Q)
+    if status == STATUS_OK:          # _interval checked the state after its last step
         t_st = t1
-    if status == STATUS_OK:
         th, ww, aa, ld = _inputs_at(t1, c)     # the step end's, usually remembered
         started = th == angle[i] and ww == speed[i] and aa == acc[i] and ld == load[i]
         flags[0] = 1.0 if started else 0.0
@@ -874,8 +872,9 @@ def advance_points(x_in, x_out, times, angle, speed, acc, load, G, P, Q, cfg, OU
     there: angle, speed, acc, load; cubic Hermite inside each step, module docstring), leaving
     ``x_in`` untouched and the state at the last point reached in ``x_out``: this level's
     instance of :func:`chainmodel.kernels.stepping.points` (its docstring: OUT, states, log,
-    the result). Status as :func:`_interval` (which checks every step), or STATUS_AMPLITUDE
-    (checked at each point too) or STATUS_OUTPUTS."""
+    the result). Status as :func:`_interval` (which checks the state after every step;
+    :func:`_check` also at the points a step spanning several takes from its dense output) or
+    STATUS_OUTPUTS."""
     K = (G, P, Q)
     return _points(x_in, x_out, times, angle, speed, acc, load, K, _begin(K, x_in.size), cfg, OUT,
                    states, log, log_cap)

@@ -309,6 +309,15 @@ def _sagging(raw, s_over_d, cube_root=0.0):
 
 
 @jit_noalloc
+def _softplus(raw, floor):
+    """The wrap's floor under a span: (raw + sqrt(raw^2 + 4 b^2)) / 2, raw + b^2 / raw well
+    above b, b at raw = 0, written without cancellation for raw < 0 (wrap_statics.softplus,
+    its Python twin; wrap_statics.py)."""
+    root = math.sqrt(raw * raw + 4.0 * floor * floor)
+    return 0.5 * (raw + root) if raw > 0.0 else 2.0 * floor * floor / (root - raw)
+
+
+@jit_noalloc
 def _floored_sag(raw, floor, ks, ks_root=0.0):
     """The positive root T of T - floor^2 / T - ks / T^2 = raw: the wrap's floor and a span's
     quasi-static sag in one law, T = softplus(raw + ks / T^2, floor) (wrap_statics._floored).
@@ -318,16 +327,12 @@ def _floored_sag(raw, floor, ks, ks_root=0.0):
     relative over raw in [-3000, 3000] N, floor in [0.1, 500] N and ks in [1, 1e10] N^3
     (measured), at a fixed cost (no loop whose count depends on the input)."""
     if ks <= 0.0:
-        if floor <= 0.0:
-            return max(raw, 0.0)
-        root = math.sqrt(raw * raw + 4.0 * floor * floor)
-        return 0.5 * (raw + root) if raw > 0.0 else 2.0 * floor * floor / (root - raw)
+        return _softplus(raw, floor) if floor > 0.0 else max(raw, 0.0)
     t = _sagging(raw, ks, ks_root)
     if floor <= 0.0:
         return t
     b2 = floor * floor
-    root = math.sqrt(raw * raw + 4.0 * b2)
-    t_floor = 0.5 * (raw + root) if raw > 0.0 else 2.0 * b2 / (root - raw)
+    t_floor = _softplus(raw, floor)
     if t_floor > t:
         t = t_floor
     for _ in range(3):
@@ -355,9 +360,9 @@ def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lba
     rule counts that relative rate (the fourth value), so no stage takes T_q below zero (the
     first version, at the full string frequency and without it, put an unbounded sag into C1
     at a sudden 400 rpm: 1e26 N), and a step whose span went slack after its start, moving
-    T_q by more than a factor of two, is retried shorter (:func:`lag_step_kept`). The span carries T = softplus(raw + k S / T_q^2, floor):
-    slowly, the quasi-static elastic catenary (the static sag, a slack span hanging on its sag
-    tension under load); well above lambda the sag is frozen and the span is elastic (the
+    T_q by more than a factor of two, is retried shorter (:func:`lag_step_kept`). The span
+    carries T = softplus(raw + k S / T_q^2, floor): slowly, the quasi-static elastic catenary
+    (the static sag, a slack span hanging on its sag tension under load); well above lambda the sag is frozen and the span is elastic (the
     torsional mode above the spans' string modes, which the static sag's softness would pull
     down). ``quasi_static``: T_q is the law's at raw_elastic itself (statics), dT_q/dt = 0.
 
@@ -369,8 +374,7 @@ def _lagged(raw, raw_elastic, lagged, quasi_static, floor, ks, ks_root, rho, lba
     sag = ks / (tq * tq)
     total = raw + sag
     if floor > 0.0:
-        root = math.sqrt(total * total + 4.0 * floor * floor)
-        t = 0.5 * (total + root) if total > 0.0 else 2.0 * floor * floor / (root - total)
+        t = _softplus(total, floor)
     else:
         t = total if total > 0.0 else 0.0
     rate = share * math.pi / lbar * math.sqrt(tq / rho)
@@ -440,11 +444,8 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
     if sag > 0.0:
         return _sagging(raw, sag * k_eff, sag_root), switch
     if soft > 0.0:
-        # the wrap's floor under the slack span (wrap_statics.py): the hyperbola
-        # (T_raw + sqrt(T_raw^2 + 4 a^2)) / 2, T_raw + a^2 / T_raw well above a, a at zero
-        if raw > 0.0:
-            return 0.5 * (raw + math.sqrt(raw * raw + 4.0 * soft * soft)), switch
-        return 2.0 * soft * soft / (math.sqrt(raw * raw + 4.0 * soft * soft) - raw), switch
+        # the wrap's floor under the slack span (wrap_statics.py)
+        return _softplus(raw, soft), switch
     if switch > 0.0:
         return raw, switch
     return 0.0, switch

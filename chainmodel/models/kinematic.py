@@ -171,11 +171,13 @@ class KinematicModel(Model):
         sags = straight_span_sags(d, p)
         if not max(sags) > 0.0:
             return 0.0, 0.0
+        from ..kernels.spans import span_stiffness
         from .chain_inertia import reference_geometry
         r = reference_geometry(d)
         c = span_ends(d, p, stretch=sum(sags))[0]
         k = p["chain.link_stiffness"]
-        return tuple(s / (n / k + c) for s, n in zip(sags, (r["n_up"], r["n_low"])))
+        return tuple(s * span_stiffness(n, k, 0.0, c)[0]
+                     for s, n in zip(sags, (r["n_up"], r["n_low"])))
 
     @cached_property
     def _raw_sum(self) -> float:
@@ -185,7 +187,8 @@ class KinematicModel(Model):
         (:meth:`held_tension`)."""
         from .wrap_statics import raw_tension
         t = self._held_tension
-        return 2.0 * raw_tension(t, self._floor) - (sum(self._sag_ks) / (t * t) if t > 0 else 0.0)
+        sag = sum(self._sag_ks) / (t * t) if t > 0 else 0.0
+        return 2.0 * raw_tension(t, self._floor) - sag
 
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()

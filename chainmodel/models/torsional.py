@@ -95,7 +95,7 @@ class TorsionalModel(Model):
         self.lag = (self.n_modes == 0 and bool(p["torsional.sag_lag"])
                     and max(self._sag_terms) > 0.0)
         if self.lag:
-            self.second_order = False     # [angles, speeds, r_up, r_low]: not [q, v]
+            self.second_order = False     # [angles, speeds, T_q,up, T_q,low]: not [q, v]
             self.first_order_states = (" (level 1's lagged sag adds a first-order state per "
                                        "span; torsional.sag_lag = false leaves it [q, v])")
         self.G = S.geometry_constants(drive)
