@@ -47,6 +47,21 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   pin-bushing friction the joint dampers stand in for (:mod:`chainmodel.loss_balance`): a
   warning when the loss exceeds twice that friction by more than 2 % of the transmitted work
   (the input work; the load's where an overrunning load drives the chain).
+* **span modes missing** (levels 0-1): these levels' spans carry no transverse modes. Where
+  the meshing's second harmonic reaches 0.8 of the slack span's first string frequency f_1
+  (seed 004 eq 61, the moving string's at the run's mean slack tension;
+  ``models.limits.span_string_frequency``), i.e. f_m >= :data:`SPAN_MODE_SHARE` f_1, the
+  polygonal action drives the spans near or above their string modes (a string driven at 0.8
+  of its mode answers 1 / (1 - 0.8^2) = 2.8x its quasi-static bow), level 3's spans bow and
+  both spans' means rise above these levels': a warning naming the frequencies and what to
+  run instead. Measured (docs/reduced_models.md, "Running spans on seed 004's presets"):
+  every drive and speed where level 1 read more than 3 % low on the tight span or 6 % low on
+  the slack span lies above the share, the lowest at f_m / f_1 = 0.50 (C1 at 45 rpm). Below
+  it lie xu2010 at 15 rpm (0.28) and C1 at 30 rpm (0.33), where level 1 passes, and the
+  6/9-tooth drive at 300 rpm (0.30), whose slack span level 1 reads 6.9 % high (its few
+  teeth, not the spans' bowing). Above it level 1 also passes on some drives (xu2010 at 30,
+  45 and 75 rpm; the 08B fan at 600 rpm, f_m / f_1 = 13: 1.4 / 1.9 % low), so the warning
+  says "may".
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
   level 3's initial layout is over by then). A warning: a torsional vibration larger than the
@@ -66,6 +81,8 @@ import numpy as np
 from .geometry import Drive
 from .loss_balance import OUTPUTS as LOSS_OUTPUTS
 from .loss_balance import LossBalance
+from .models.chain_inertia import reference_geometry
+from .models.limits import chain_speed, span_string_frequency
 
 __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load",
            "output_problems", "problems", "result_problems", "Monitor", "REVERSAL_SPEED"]
@@ -75,13 +92,18 @@ REVERSAL_SPEED = 1e-3
 
 OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_force",
            "chain.max_link_tension", "chain.min_link_tension")
+#: what the span-modes check of levels 0-1 reads besides OUTPUTS
+SPAN_OUTPUTS = ("slack_span.tension", "driver.speed")
+#: levels 0-1 warn where the meshing frequency reaches this share of the slack span's first
+#: string frequency (its second harmonic at 0.8 of it; module docstring, "span modes missing")
+SPAN_MODE_SHARE = 0.4
 
 
 @dataclass(frozen=True)
 class Problem:
     """One finding: ``code`` (chain_too_long, chain_too_short, breaking_load,
-    penetration_roller, teeth_skipped, driven_reversal, damper_losses, ...), the sentence, and whether it makes the
-    result meaningless."""
+    penetration_roller, teeth_skipped, driven_reversal, damper_losses, span_modes_missing,
+    ...), the sentence, and whether it makes the result meaningless."""
 
     code: str
     message: str
@@ -109,6 +131,7 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "teeth_skipped": "teeth skipped",
           "driven_reversal": "driven sprocket reversing under forward drive",
           "damper_losses": "level 3's dampers dissipate more than joint friction would",
+          "span_modes_missing": "the meshing reaches span modes that levels 0-1 do not have",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
           "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
           "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
@@ -329,6 +352,9 @@ class _Stats:
     periods: int = 0               # whole driver tooth periods reached
     last_k: int = 0
     last_drift: float = 0.0
+    slack_sum: float = 0.0         # slack-span tension and driver speed summed over the
+    speed_sum: float = 0.0         # samples once the driver has turned a tooth (levels 0-1)
+    span_samples: int = 0
 
 
 class Monitor:
@@ -348,7 +374,7 @@ class Monitor:
                        and all(n in names for n in OUTPUTS) else None)
         self._ix = tuple(self._index[n] for n in OUTPUTS) if self._index else ()
         self._k = 0                 # whole tooth periods of the driver at the last sample
-        self._alarm = (False, False, 0.0, False)
+        self._alarm = (False, False, 0.0, False, False)
         # below these no output check can fire: update() then skips problems() (FMU steps)
         bl = breaking_load(drive, self.params)
         self._force_alarm = math.inf if bl is None else bl[0]
@@ -360,6 +386,10 @@ class Monitor:
         self._loss_ix = (tuple(names.index(n) for n in LOSS_OUTPUTS)
                          if self._losses is not None and names is not None
                          and all(n in names for n in LOSS_OUTPUTS) else None)
+        self._span_ix = (tuple(names.index(n) for n in SPAN_OUTPUTS)
+                         if self.level <= 1 and names is not None
+                         and all(n in names for n in SPAN_OUTPUTS) else None)
+        self._span_length = None    # the spans' mean length, once needed
 
     # -- sample by sample --------------------------------------------------------------------
     def update(self, t: float, row, input_speed: float, load_torque: float = 0.0) -> list[str]:
@@ -368,8 +398,17 @@ class Monitor:
         if self._index is None:
             return []
         a, b, c, d, e, f = self._ix
+        k = self._k
         self._sample(float(t), float(row[a]), float(row[b]), float(row[c]), float(row[d]),
                      float(row[e]), float(row[f]), float(input_speed))
+        span = self._alarm[4]
+        if self._span_ix is not None and abs(float(row[a]) - self._start[0]) >= self.period:
+            s = self.stats
+            s.slack_sum += float(row[self._span_ix[0]])
+            s.speed_sum += float(row[self._span_ix[1]])
+            s.span_samples += 1
+            if self._k != k or s.span_samples == 1:   # judged once a driver tooth period
+                span = self._span_modes() is not None
         losses = False
         if self._loss_ix is not None:
             self._losses.add_one(float(t), *(float(row[i]) for i in self._loss_ix),
@@ -378,7 +417,7 @@ class Monitor:
         s = self.stats
         force = max(s.max_contact, s.max_link, -s.min_link)
         alarm = (s.reversed_samples > 0, abs(s.drift) > self._skip_limit,
-                 force if force > self._force_alarm else 0.0, losses)
+                 force if force > self._force_alarm else 0.0, losses, span)
         if alarm == self._alarm:        # nothing that could raise a new problem has changed
             return []
         self._alarm = alarm
@@ -475,6 +514,11 @@ class Monitor:
             if math.isnan(s.t_reversal):
                 s.t_reversal = float(t[np.argmax(rev)])
             s.reversal = min(s.reversal, float(np.min(along[rev])))
+        if self.level <= 1 and all(n in outputs for n in SPAN_OUTPUTS):
+            turned = np.abs(phi1 - phi0) >= self.period
+            s.slack_sum += float(np.sum(np.asarray(outputs["slack_span.tension"], float)[turned]))
+            s.speed_sum += float(np.sum(np.asarray(outputs["driver.speed"], float)[turned]))
+            s.span_samples += int(turned.sum())
         k = np.floor((phi1 - phi0) / self.period)
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
@@ -486,6 +530,27 @@ class Monitor:
         self._k = int(k[-1])
 
     # -- the findings ----------------------------------------------------------------------------
+    def _span_modes(self):
+        """(meshing frequency, slack span's first string frequency [Hz], mean slack tension
+        [N]) when the meshing reaches SPAN_MODE_SHARE of that frequency over the samples so
+        far (levels 0-1), else None."""
+        s, d = self.stats, self.drive
+        if self.level > 1 or not s.span_samples:
+            return None
+        speed = s.speed_sum / s.span_samples
+        f_m = abs(speed) * d.n_driver / (2.0 * math.pi)
+        if not f_m > 0.0:
+            return None
+        if self._span_length is None:
+            ref = reference_geometry(d)
+            self._span_length = 0.5 * (ref["l_up"] + ref["l_low"])
+        slack = s.slack_sum / s.span_samples
+        f_1 = span_string_frequency(self._span_length, slack, chain_speed(d, speed),
+                                    self.params["chain.link_mass"] / d.pitch, moving=True)
+        if not f_1 > 0.0 or f_m < SPAN_MODE_SHARE * f_1:
+            return None
+        return f_m, f_1, slack
+
     def problems(self) -> list[Problem]:
         """Problems found in the samples so far (geometry not included: :func:`problems`)."""
         s, d, p = self.stats, self.drive, self.params
@@ -521,6 +586,20 @@ class Monitor:
             why = self._losses.message()
             if why is not None:
                 out.append(Problem("damper_losses", why))
+        found = self._span_modes()
+        if found is not None:
+            f_m, f_1, slack = found
+            below = SPAN_MODE_SHARE * f_1 * 60.0 / d.n_driver
+            out.append(Problem("span_modes_missing", (
+                f"level {self.level} has no span modes, and the meshing ({f_m:.4g} Hz) is "
+                f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at its "
+                f"mean {slack:.4g} N; warned from {SPAN_MODE_SHARE:g} x): where the spans bow, "
+                f"level 3's span tensions run higher and this level's may read low (level 1 "
+                f"on the drives measured: up to 55 % on the tight span and 82 % on the slack "
+                f"span; docs/stability.md, \"Where a result is valid\"); check against "
+                f"fidelity 2 or 3"
+                + (f", or run below {below:.3g} rpm" if below >= 1.0 else
+                   " (its slack span carries almost no tension)"))))
         if self.level >= 1:
             half = math.pi / d.n_driven
             slack = self._skip_limit - half
@@ -556,8 +635,9 @@ class Monitor:
 def output_problems(drive: Drive, params: Mapping[str, Any], level: int, time,
                     outputs: Mapping[str, np.ndarray], input_speed,
                     load_torque=0.0) -> list[Problem]:
-    """The output checks (breaking load; at level 3 the roller's overlap and the damper losses; at levels
-    1-3 teeth skipped and driven-speed reversal) over a whole run. ``input_speed``,
+    """The output checks (breaking load; at level 3 the roller's overlap and the damper losses;
+    at levels 0-1 the span modes; at levels 1-3 teeth skipped and driven-speed reversal) over a
+    whole run. ``input_speed``,
     ``load_torque``: the inputs at each sample (or one number)."""
     if any(n not in outputs for n in OUTPUTS):
         return []
@@ -581,5 +661,5 @@ def result_problems(result) -> list[Problem]:
     input speed)."""
     sc = result.scene
     _, speed, _, load = sc.input_arrays(result.time)
-    outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS if n in result}
+    outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS + SPAN_OUTPUTS if n in result}
     return problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load)

@@ -473,7 +473,9 @@ def test_item10_coarse_interval_warns_and_keeps_t0_out():
     assert math.isnan(s["dominant_frequency_hz"])
     assert any("cannot resolve the meshing frequency" in w for w in s["warnings"])
     fine = chainmodel.simulate("xu2010", fidelity=0, duration=0.2).summary()
-    assert fine["warnings"] == []
+    # nothing about the window or the interval (level 0 at 120 rpm is warned that the meshing
+    # reaches the span modes it does not have: chainmodel.validity, span_modes_missing)
+    assert [w for w in fine["warnings"] if "has no span modes" not in w] == []
 
 
 def test_steady_window_never_reaches_before_its_start():

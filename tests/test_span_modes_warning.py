@@ -1,0 +1,81 @@
+"""Levels 0-1 warn where the meshing reaches the spans' string modes, which they do not have
+(chainmodel.validity, "span modes missing"; docs/reduced_models.md, "Running spans on seed
+004's presets").
+
+The string frequency is computed here from the drive's geometry (the span as the common
+tangent of the two pitch circles, sqrt(a^2 - (R2 - R1)^2), R = p / (2 sin(pi / z))) and the
+taut moving string (seed 004 eq 61 with the
+gyroscopic factor of an axially moving string, (c^2 - v^2) / (2 l c), c^2 = T / rho), at the
+run's own mean slack tension; the threshold's side is asserted only for points at least 15 %
+away from it."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+import chainmodel
+from chainmodel.scene import load_scene
+from chainmodel.validity import SPAN_MODE_SHARE
+
+CODE_TEXT = "has no span modes"
+
+
+def _first_string_mode(name: str, slack: float, rpm: float) -> float:
+    d = load_scene(name).drive
+    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
+    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
+    rho = load_scene(name).parameters["chain.link_mass"] / d.pitch
+    c2 = slack / rho
+    v = d.n_driver * d.pitch * rpm / 60.0
+    return (c2 - v * v) / (2.0 * length * math.sqrt(c2))
+
+
+def _run(name, level, rpm):
+    return chainmodel.simulate(name, fidelity=level, input_speed_rpm=rpm, duration=0.6,
+                               output_interval=2e-4)
+
+
+@pytest.mark.parametrize("name,rpm", [("xu2010", 15.0), ("xu2010", 30.0), ("C1", 30.0),
+                                      ("C1", 45.0)])
+def test_level1_warns_where_the_meshing_reaches_the_slack_spans_string_mode(name, rpm):
+    r = _run(name, 1, rpm)
+    d = load_scene(name).drive
+    turned = np.abs(r["driver.angle"] - r["driver.angle"][0]) >= 2 * math.pi / d.n_driver
+    slack = float(np.mean(r["slack_span.tension"][turned]))
+    f_1 = _first_string_mode(name, slack, rpm)
+    ratio = (d.n_driver * rpm / 60.0) / f_1
+    assert abs(ratio / SPAN_MODE_SHARE - 1.0) > 0.15, ratio    # not on the edge
+    warned = [w for w in r.warnings if CODE_TEXT in w]
+    assert bool(warned) == (ratio >= SPAN_MODE_SHARE), (ratio, r.warnings)
+    if warned:
+        named = float(re.search(r"first string mode \(([\d.]+) Hz", warned[0]).group(1))
+        assert named == pytest.approx(f_1, rel=0.03)
+        assert "fidelity 2 or 3" in warned[0]
+
+
+def test_level0_warns_as_level1_and_level2_does_not():
+    """Level 0 has no span modes either; level 2 carries them (its strings), so the check does
+    not apply to it."""
+    assert any(CODE_TEXT in w for w in _run("xu2010", 0, 120.0).warnings)
+    assert not any(CODE_TEXT in w for w in _run("xu2010", 2, 120.0).warnings)
+
+
+def test_the_fmu_path_logs_it_once():
+    """Sample by sample (the FMU's Monitor.update) the check fires once, as for the whole run."""
+    from chainmodel.models import ALL_OUTPUTS
+    from chainmodel.validity import Monitor
+
+    sc = load_scene("xu2010", fidelity=1)
+    r = _run("xu2010", 1, 120.0)
+    names = [o.name for o in ALL_OUTPUTS]
+    rows = np.column_stack([r[n] for n in names])
+    mon = Monitor(sc.drive, sc.parameters, 1, names)
+    said = []
+    speed = 120.0 * 2 * math.pi / 60.0
+    for t, row in zip(r.time, rows):
+        said += mon.update(t, row, speed)
+    assert sum(CODE_TEXT in s for s in said) == 1
