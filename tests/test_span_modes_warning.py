@@ -79,3 +79,16 @@ def test_the_fmu_path_logs_it_once():
     for t, row in zip(r.time, rows):
         said += mon.update(t, row, speed)
     assert sum(CODE_TEXT in s for s in said) == 1
+
+
+@pytest.mark.fmu
+def test_the_fmu_logs_it_as_fmi2warning_once(chaindrive_fmu):
+    """Through the built FMU (fmpy): logged once at 120 rpm, not at 15 rpm (f_m / f_1 = 2.2 and
+    0.28 in the test above's terms)."""
+    from chainmodel.fmu import simulate_fmu
+    for rpm, duration, expected in ((120.0, 0.1, 1), (15.0, 0.6, 0)):
+        messages = []
+        simulate_fmu(chaindrive_fmu, load_scene("xu2010", fidelity=1, duration=duration,
+                                                input_speed_rpm=rpm), log=messages.append)
+        warned = [m for m in messages if m.startswith("[WARNING]") and CODE_TEXT in m]
+        assert len(warned) == expected, (rpm, messages)
