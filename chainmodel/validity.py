@@ -47,20 +47,23 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   pin-bushing friction the joint dampers stand in for (:mod:`chainmodel.loss_balance`): a
   warning when the loss exceeds twice that friction by more than 2 % of the transmitted work
   (the input work; the load's where an overrunning load drives the chain).
-* **span modes missing** (levels 0-1): these levels' spans carry no transverse modes. Where
-  the meshing's second harmonic reaches 0.8 of the slack span's first string frequency f_1
-  (seed 004 eq 61, the moving string's at the run's mean slack tension;
-  ``models.limits.span_string_frequency``), i.e. f_m >= :data:`SPAN_MODE_SHARE` f_1, the
-  polygonal action drives the spans near or above their string modes (a string driven at 0.8
-  of its mode answers 1 / (1 - 0.8^2) = 2.8x its quasi-static bow), level 3's spans bow and
-  both spans' means rise above these levels': a warning naming the frequencies and what to
-  run instead. Measured (docs/reduced_models.md, "Running spans on seed 004's presets"):
-  every drive and speed where level 1 read more than 3 % low on the tight span or 6 % low on
-  the slack span lies above the share, the lowest at f_m / f_1 = 0.50 (C1 at 45 rpm). Below
-  it lie xu2010 at 15 rpm (0.28) and C1 at 30 rpm (0.33), where level 1 passes, and the
-  6/9-tooth drive at 300 rpm (0.30), whose slack span level 1 reads 6.9 % high (its few
-  teeth, not the spans' bowing). Above it level 1 also passes on some drives (xu2010 at 30,
-  45 and 75 rpm; the 08B fan at 600 rpm, f_m / f_1 = 13: 1.4 / 1.9 % low), so the warning
+* **span modes missing** (levels 0-1): these levels' spans carry no transverse modes. A
+  warning where the meshing frequency f_m (z1 times the mean |driver speed| / 2 pi) reaches
+  :data:`SPAN_MODE_SHARE` = 0.4 of the slack span's first string frequency f_1 (seed 004 eq
+  61, the moving string's, ``models.limits.span_string_frequency``, at the run's mean slack
+  tension; 0 Hz where that is no more than the centrifugal tension), naming the frequencies
+  and what to run instead. Both means skip the first SPAN_START_PERIODS driver tooth periods
+  and are judged from SPAN_JUDGE_PERIODS on. The line is empirical (docs/reduced_models.md,
+  "Running spans on seed 004's presets"): every drive and speed where level 1 read more than
+  3 % low on the tight span or 6 % low on the slack span lies at f_m / f_1 >= 0.50 at level
+  1's own tension (the lowest C1 at 45 rpm; 0.49 at level 3's), and below 0.4 lie xu2010 at
+  15 rpm (0.28) and C1 at 30 rpm (0.33), where level 1 passes, and the 6/9-tooth drive at 300
+  rpm (0.30), whose slack span level 1 reads 6.9 % high (its few teeth, not the spans'
+  bowing). At 0.4 the meshing's second harmonic is at 0.8 f_1, where a string answers its
+  ends' motion at that harmonic 1 / (1 - 0.8^2) = 2.8x quasi-statically (the fundamental, at
+  0.4 f_1, only 1.19x); the parametric resonances through the tension ripple (f_m near
+  2 f_1 / n) lie above it too. Above the line level 1 also passes on some drives (xu2010 at
+  30, 45 and 75 rpm; the 08B fan at 600 rpm, f_m / f_1 = 13: 1.4 / 1.9 % low), so the warning
   says "may".
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
@@ -97,6 +100,12 @@ SPAN_OUTPUTS = ("slack_span.tension", "driver.speed")
 #: levels 0-1 warn where the meshing frequency reaches this share of the slack span's first
 #: string frequency (its second harmonic at 0.8 of it; module docstring, "span modes missing")
 SPAN_MODE_SHARE = 0.4
+#: its means skip the first SPAN_START_PERIODS driver tooth periods (the start and the ramp's
+#: transient) and are judged once the driver has turned SPAN_JUDGE_PERIODS, in both the
+#: sample-by-sample path (the FMU) and the whole-run one (the library), so that both read the
+#: same samples and the FMU does not warn on a start-up mean that the run's own mean would not
+SPAN_START_PERIODS = 2
+SPAN_JUDGE_PERIODS = 4
 
 
 @dataclass(frozen=True)
@@ -355,6 +364,7 @@ class _Stats:
     slack_sum: float = 0.0         # slack-span tension and driver speed summed over the
     speed_sum: float = 0.0         # samples once the driver has turned a tooth (levels 0-1)
     span_samples: int = 0
+    span_periods: float = 0.0      # driver tooth periods turned (from the first sample)
 
 
 class Monitor:
@@ -402,13 +412,16 @@ class Monitor:
         self._sample(float(t), float(row[a]), float(row[b]), float(row[c]), float(row[d]),
                      float(row[e]), float(row[f]), float(input_speed))
         span = self._alarm[4]
-        if self._span_ix is not None and abs(float(row[a]) - self._start[0]) >= self.period:
-            s = self.stats
-            s.slack_sum += float(row[self._span_ix[0]])
-            s.speed_sum += float(row[self._span_ix[1]])
-            s.span_samples += 1
-            if self._k != k or s.span_samples == 1:   # judged once a driver tooth period
-                span = self._span_modes() is not None
+        if self._span_ix is not None:
+            turned = abs(float(row[a]) - self._start[0]) / self.period
+            if turned >= SPAN_START_PERIODS:
+                s = self.stats
+                s.slack_sum += float(row[self._span_ix[0]])
+                s.speed_sum += abs(float(row[self._span_ix[1]]))
+                s.span_samples += 1
+                s.span_periods = max(s.span_periods, turned)
+                if self._k != k:        # judged once a driver tooth period
+                    span = self._span_modes() is not None
         losses = False
         if self._loss_ix is not None:
             self._losses.add_one(float(t), *(float(row[i]) for i in self._loss_ix),
@@ -515,10 +528,14 @@ class Monitor:
                 s.t_reversal = float(t[np.argmax(rev)])
             s.reversal = min(s.reversal, float(np.min(along[rev])))
         if self.level <= 1 and all(n in outputs for n in SPAN_OUTPUTS):
-            turned = np.abs(phi1 - phi0) >= self.period
+            periods = np.abs(phi1 - phi0) / self.period
+            turned = periods >= SPAN_START_PERIODS
             s.slack_sum += float(np.sum(np.asarray(outputs["slack_span.tension"], float)[turned]))
-            s.speed_sum += float(np.sum(np.asarray(outputs["driver.speed"], float)[turned]))
+            s.speed_sum += float(np.sum(np.abs(np.asarray(outputs["driver.speed"],
+                                                          float)[turned])))
             s.span_samples += int(turned.sum())
+            if turned.any():
+                s.span_periods = max(s.span_periods, float(np.max(periods)))
         k = np.floor((phi1 - phi0) / self.period)
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
@@ -535,19 +552,21 @@ class Monitor:
         [N]) when the meshing reaches SPAN_MODE_SHARE of that frequency over the samples so
         far (levels 0-1), else None."""
         s, d = self.stats, self.drive
-        if self.level > 1 or not s.span_samples:
+        if self.level > 1 or not s.span_samples or s.span_periods < SPAN_JUDGE_PERIODS:
             return None
-        speed = s.speed_sum / s.span_samples
-        f_m = abs(speed) * d.n_driver / (2.0 * math.pi)
+        speed = s.speed_sum / s.span_samples       # the mean of |driver speed|
+        f_m = speed * d.n_driver / (2.0 * math.pi)
         if not f_m > 0.0:
             return None
         if self._span_length is None:
             ref = reference_geometry(d)
             self._span_length = 0.5 * (ref["l_up"] + ref["l_low"])
         slack = s.slack_sum / s.span_samples
+        # 0 Hz where the slack span carries no more than its centrifugal tension: every
+        # meshing frequency is then above its modes
         f_1 = span_string_frequency(self._span_length, slack, chain_speed(d, speed),
                                     self.params["chain.link_mass"] / d.pitch, moving=True)
-        if not f_1 > 0.0 or f_m < SPAN_MODE_SHARE * f_1:
+        if f_m < SPAN_MODE_SHARE * f_1:
             return None
         return f_m, f_1, slack
 
@@ -590,10 +609,13 @@ class Monitor:
         if found is not None:
             f_m, f_1, slack = found
             below = SPAN_MODE_SHARE * f_1 * 60.0 / d.n_driver
+            where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at "
+                     f"its mean {slack:.4g} N; warned from {SPAN_MODE_SHARE:g} x)" if f_1 > 0.0
+                     else f"above every string mode of the slack span, whose mean {slack:.4g} "
+                     f"N is no more than its centrifugal tension")
             out.append(Problem("span_modes_missing", (
                 f"level {self.level} has no span modes, and the meshing ({f_m:.4g} Hz) is "
-                f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at its "
-                f"mean {slack:.4g} N; warned from {SPAN_MODE_SHARE:g} x): where the spans bow, "
+                f"{where}: where the spans bow, "
                 f"level 3's span tensions run higher and this level's may read low (level 1 "
                 f"on the drives measured: up to 55 % on the tight span and 82 % on the slack "
                 f"span; docs/stability.md, \"Where a result is valid\"); check against "

@@ -271,11 +271,9 @@ def test_run_table_csv_and_plot(capsys, tmp_path):
 def test_run_quiet_prints_nothing(capsys, tmp_path):
     code, out, err = run_cli(capsys, "run", "xu2010", "--fidelity", 0, "--duration", 0.1,
                              "--quiet", "--csv", tmp_path / "q.csv")
-    # nothing but the run's one warning (level 0 at 120 rpm: the meshing reaches the span
-    # modes it does not have, chainmodel.validity), which --quiet keeps on stderr
-    assert (code, out) == (0, "")
-    assert [line[:51] for line in err.splitlines()] == [
-        "chainmodel: warning: level 0 has no span modes, and"]
+    # nothing (0.1 s is too short for levels 0-1's span-modes check, which judges once the
+    # driver has turned 4 tooth periods: chainmodel.validity.SPAN_JUDGE_PERIODS)
+    assert (code, out, err) == (0, "", "")
     assert (tmp_path / "q.csv").stat().st_size > 1000
 
 

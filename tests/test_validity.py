@@ -180,9 +180,8 @@ def test_cli_exits_3_on_an_invalid_result(capsys):
 @pytest.mark.parametrize("level", [0, 1])
 def test_chain_35_links_too_long_warns(level):
     r = chainmodel.simulate("xu2010", fidelity=level, drive_links=46 + 35, duration=0.1)
-    # the meshing at 120 rpm also reaches the span modes levels 0-1 do not have
-    assert codes(r.problems) == {"chain_too_long", "span_modes_missing"}
-    assert r.problems[0].code == "chain_too_long"
+    # (0.1 s is too short for the span-modes check, chainmodel.validity.SPAN_JUDGE_PERIODS)
+    assert codes(r.problems) == {"chain_too_long"}
     text = r.warnings[0]
     assert "drive.links = 81" in text and "drive.links = 46" in text   # cause and what to change
     assert "35 pitches" in text
