@@ -53,7 +53,9 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   61, the moving string's, ``models.limits.span_string_frequency``, at the run's mean slack
   tension; 0 Hz where that is no more than the centrifugal tension), naming the frequencies
   and what to run instead. Both means skip the first SPAN_START_PERIODS driver tooth periods
-  and are judged from SPAN_JUDGE_PERIODS on. The line is empirical (docs/reduced_models.md,
+  and are judged at every whole driver tooth period from SPAN_JUDGE_PERIODS on, in the
+  sample-by-sample path (the FMU) and the whole-run one (the library) alike; a verdict that
+  fired stays. The line is empirical (docs/reduced_models.md,
   "Running spans on seed 004's presets"): every drive and speed where level 1 read more than
   3 % low on the tight span or 6 % low on the slack span lies at f_m / f_1 >= 0.50 at level
   1's own tension (the lowest C1 at 45 rpm; 0.49 at level 3's), and below 0.4 lie xu2010 at
@@ -101,9 +103,10 @@ SPAN_OUTPUTS = ("slack_span.tension", "driver.speed")
 #: string frequency (its second harmonic at 0.8 of it; module docstring, "span modes missing")
 SPAN_MODE_SHARE = 0.4
 #: its means skip the first SPAN_START_PERIODS driver tooth periods (the start and the ramp's
-#: transient) and are judged once the driver has turned SPAN_JUDGE_PERIODS, in both the
-#: sample-by-sample path (the FMU) and the whole-run one (the library), so that both read the
-#: same samples and the FMU does not warn on a start-up mean that the run's own mean would not
+#: transient) and are judged at each whole driver tooth period once the driver has turned
+#: SPAN_JUDGE_PERIODS, in both the sample-by-sample path (the FMU) and the whole-run one (the
+#: library), so that both read the same samples at the same instants: the FMU does not warn on
+#: a start-up mean, nor the library on a partial last tooth period, where the other would not
 SPAN_START_PERIODS = 2
 SPAN_JUDGE_PERIODS = 4
 
@@ -400,6 +403,7 @@ class Monitor:
                          if self.level <= 1 and names is not None
                          and all(n in names for n in SPAN_OUTPUTS) else None)
         self._span_length = None    # the spans' mean length, once needed
+        self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
 
     # -- sample by sample --------------------------------------------------------------------
     def update(self, t: float, row, input_speed: float, load_torque: float = 0.0) -> list[str]:
@@ -420,8 +424,10 @@ class Monitor:
                 s.speed_sum += abs(float(row[self._span_ix[1]]))
                 s.span_samples += 1
                 s.span_periods = max(s.span_periods, turned)
-                if self._k != k:        # judged once a driver tooth period
-                    span = self._span_modes() is not None
+                if self._k != k:        # judged at each whole driver tooth period
+                    self._span_judge(s.speed_sum, s.slack_sum, s.span_samples,
+                                     s.span_periods)
+                    span = self._span_found is not None
         losses = False
         if self._loss_ix is not None:
             self._losses.add_one(float(t), *(float(row[i]) for i in self._loss_ix),
@@ -527,16 +533,10 @@ class Monitor:
             if math.isnan(s.t_reversal):
                 s.t_reversal = float(t[np.argmax(rev)])
             s.reversal = min(s.reversal, float(np.min(along[rev])))
-        if self.level <= 1 and all(n in outputs for n in SPAN_OUTPUTS):
-            periods = np.abs(phi1 - phi0) / self.period
-            turned = periods >= SPAN_START_PERIODS
-            s.slack_sum += float(np.sum(np.asarray(outputs["slack_span.tension"], float)[turned]))
-            s.speed_sum += float(np.sum(np.abs(np.asarray(outputs["driver.speed"],
-                                                          float)[turned])))
-            s.span_samples += int(turned.sum())
-            if turned.any():
-                s.span_periods = max(s.span_periods, float(np.max(periods)))
         k = np.floor((phi1 - phi0) / self.period)
+        if self.level <= 1 and all(n in outputs for n in SPAN_OUTPUTS):
+            self._span_arrays(phi1, k, np.asarray(outputs["slack_span.tension"], float),
+                              np.abs(np.asarray(outputs["driver.speed"], float)))
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
                             float(t[0]))
@@ -546,22 +546,46 @@ class Monitor:
         self._last = (float(phi1[-1]), float(te[-1]), float(t[-1]))
         self._k = int(k[-1])
 
+    def _span_arrays(self, phi1, k, slack, speed):
+        """The span-modes sums of a whole run, judged at every whole driver tooth period as
+        :meth:`update` judges them sample by sample (the same samples, the same verdicts)."""
+        s = self.stats
+        periods = np.abs(phi1 - self._start[0]) / self.period
+        counted = periods >= SPAN_START_PERIODS
+        slack_sum = s.slack_sum + np.cumsum(np.where(counted, slack, 0.0))
+        speed_sum = s.speed_sum + np.cumsum(np.where(counted, speed, 0.0))
+        samples = s.span_samples + np.cumsum(counted)
+        turned = np.maximum(s.span_periods, np.maximum.accumulate(np.where(counted, periods,
+                                                                           0.0)))
+        previous = np.concatenate(([self._k], k[:-1]))
+        for i in np.flatnonzero(counted & (k != previous) & (turned >= SPAN_JUDGE_PERIODS)):
+            self._span_judge(float(speed_sum[i]), float(slack_sum[i]), int(samples[i]),
+                             float(turned[i]))
+        s.slack_sum, s.speed_sum = float(slack_sum[-1]), float(speed_sum[-1])
+        s.span_samples, s.span_periods = int(samples[-1]), float(turned[-1])
+
     # -- the findings ----------------------------------------------------------------------------
-    def _span_modes(self):
-        """(meshing frequency, slack span's first string frequency [Hz], mean slack tension
-        [N]) when the meshing reaches SPAN_MODE_SHARE of that frequency over the samples so
-        far (levels 0-1), else None."""
-        s, d = self.stats, self.drive
-        if self.level > 1 or not s.span_samples or s.span_periods < SPAN_JUDGE_PERIODS:
-            return None
-        speed = s.speed_sum / s.span_samples       # the mean of |driver speed|
+    def _span_judge(self, speed_sum, slack_sum, samples, periods):
+        """Judge the span-modes check on these sums; keeps (meshing frequency, slack span's
+        first string frequency [Hz], mean slack tension [N]) when the meshing reaches
+        SPAN_MODE_SHARE of that frequency (levels 0-1). A verdict that fired stays (a warning
+        is not taken back, as in the FMU's log)."""
+        if self.level > 1 or not samples or periods < SPAN_JUDGE_PERIODS:
+            return
+        found = self._span_modes(speed_sum / samples, slack_sum / samples)
+        if found is not None:
+            self._span_found = found
+
+    def _span_modes(self, speed, slack):
+        """(f_m, f_1, slack) at mean |driver speed| ``speed`` and mean slack tension ``slack``
+        when f_m >= SPAN_MODE_SHARE f_1, else None."""
+        d = self.drive
         f_m = speed * d.n_driver / (2.0 * math.pi)
         if not f_m > 0.0:
             return None
         if self._span_length is None:
             ref = reference_geometry(d)
             self._span_length = 0.5 * (ref["l_up"] + ref["l_low"])
-        slack = s.slack_sum / s.span_samples
         # 0 Hz where the slack span carries no more than its centrifugal tension: every
         # meshing frequency is then above its modes
         f_1 = span_string_frequency(self._span_length, slack, chain_speed(d, speed),
@@ -605,10 +629,11 @@ class Monitor:
             why = self._losses.message()
             if why is not None:
                 out.append(Problem("damper_losses", why))
-        found = self._span_modes()
+        found = self._span_found
         if found is not None:
             f_m, f_1, slack = found
-            below = SPAN_MODE_SHARE * f_1 * 60.0 / d.n_driver
+            # rounded down: the speed printed is below the line
+            below = math.floor(10.0 * SPAN_MODE_SHARE * f_1 * 60.0 / d.n_driver) / 10.0
             where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at "
                      f"its mean {slack:.4g} N; warned from {SPAN_MODE_SHARE:g} x)" if f_1 > 0.0
                      else f"above every string mode of the slack span, whose mean {slack:.4g} "
@@ -618,9 +643,9 @@ class Monitor:
                 f"{where}: where the spans bow, "
                 f"level 3's span tensions run higher and this level's may read low (level 1 "
                 f"on the drives measured: up to 55 % on the tight span and 82 % on the slack "
-                f"span; docs/stability.md, \"Where a result is valid\"); check against "
-                f"fidelity 2 or 3"
-                + (f", or run below {below:.3g} rpm" if below >= 1.0 else
+                f"span; docs/reduced_models.md, \"Running spans on seed 004's presets\"); "
+                f"check against fidelity 2 or 3"
+                + (f", or run below {below:g} rpm" if below >= 1.0 else
                    " (its slack span carries almost no tension)"))))
         if self.level >= 1:
             half = math.pi / d.n_driven
