@@ -50,7 +50,7 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
 * **span modes missing** (levels 0-1): these levels' spans carry no transverse modes. A
   warning where the meshing frequency f_m (z1 times the mean |driver speed| / 2 pi) reaches
   :data:`SPAN_MODE_SHARE` = 0.4 of the slack span's first string frequency f_1 (seed 004 eq
-  61, the moving string's, ``models.limits.span_string_frequency``, at the run's mean slack
+  61, the moving string's, ``models.limits.drive_string_frequency``, at the run's mean slack
   tension; 0 Hz where that is no more than the centrifugal tension), naming the frequencies
   and what to run instead. Both means skip the first SPAN_START_PERIODS driver tooth periods
   and are judged at every whole driver tooth period from SPAN_JUDGE_PERIODS on, in the
@@ -86,8 +86,7 @@ import numpy as np
 from .geometry import Drive
 from .loss_balance import OUTPUTS as LOSS_OUTPUTS
 from .loss_balance import LossBalance
-from .models.chain_inertia import reference_geometry
-from .models.limits import chain_speed, span_string_frequency
+from .models.limits import drive_string_frequency
 
 __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load",
            "output_problems", "problems", "result_problems", "Monitor", "REVERSAL_SPEED"]
@@ -402,7 +401,6 @@ class Monitor:
         self._span_ix = (tuple(names.index(n) for n in SPAN_OUTPUTS)
                          if self.level <= 1 and names is not None
                          and all(n in names for n in SPAN_OUTPUTS) else None)
-        self._span_length = None    # the spans' mean length, once needed
         self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
 
     # -- sample by sample --------------------------------------------------------------------
@@ -583,13 +581,9 @@ class Monitor:
         f_m = speed * d.n_driver / (2.0 * math.pi)
         if not f_m > 0.0:
             return None
-        if self._span_length is None:
-            ref = reference_geometry(d)
-            self._span_length = 0.5 * (ref["l_up"] + ref["l_low"])
         # 0 Hz where the slack span carries no more than its centrifugal tension: every
         # meshing frequency is then above its modes
-        f_1 = span_string_frequency(self._span_length, slack, chain_speed(d, speed),
-                                    self.params["chain.link_mass"] / d.pitch, moving=True)
+        f_1 = drive_string_frequency(d, self.params, slack, speed)
         if f_m < SPAN_MODE_SHARE * f_1:
             return None
         return f_m, f_1, slack

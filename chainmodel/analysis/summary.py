@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 
-from ..models.chain_inertia import reference_geometry
-from ..models.limits import chain_speed, nearest_span_resonance, span_string_frequency
+from ..models.limits import drive_string_frequency, nearest_span_resonance
 
 __all__ = ["steady_window", "dominant_frequency", "tooth_ratio", "span_modes", "summarise"]
 
@@ -73,11 +72,7 @@ def span_modes(drive, params, mean_speed: float, tight: float, slack: float) -> 
     summary's ``tight_span_mode_hz``, ``slack_span_mode_hz``, ``span_resonance`` (in words)
     and ``span_resonance_detuning``. Both spans of a two-sprocket drive have the same mean
     length (the two tangents), taken over a tooth period."""
-    ref = reference_geometry(drive)
-    length = 0.5 * (ref["l_up"] + ref["l_low"])
-    rho = params["chain.link_mass"] / drive.pitch
-    v = chain_speed(drive, mean_speed)
-    modes = {name: span_string_frequency(length, tension, v, rho, moving=True)
+    modes = {name: drive_string_frequency(drive, params, tension, mean_speed)
              for name, tension in (("tight", tight), ("slack", slack))}
     mesh = abs(mean_speed) * drive.n_driver / (2 * math.pi)
     span, k, n, detuning = nearest_span_resonance(mesh, modes)

@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any, Mapping
 
 import numpy as np
@@ -27,6 +28,14 @@ def reference_geometry(drive: Drive) -> dict[str, float]:
             "l_up": float(np.mean(g.upper.length)), "l_low": float(np.mean(g.lower.length)),
             "dir_up": float(np.mean(g.upper.direction)),
             "dir_low": float(np.mean(g.lower.direction))}
+
+
+@lru_cache(maxsize=64)
+def mean_span_length(drive: Drive) -> float:
+    """The spans' tooth-period-mean length [m] (the two tangents' mean, equal on a
+    two-sprocket drive): the length of :func:`chainmodel.models.limits.drive_string_frequency`."""
+    ref = reference_geometry(drive)
+    return 0.5 * (ref["l_up"] + ref["l_low"])
 
 
 def sprocket_mass_matrix(drive: Drive, params: Mapping[str, Any],

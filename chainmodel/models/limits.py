@@ -29,7 +29,8 @@ from ..geometry import Drive
 
 __all__ = ["STRAIN_LIMIT", "ANGLE_LIMIT", "QUASI_STATIC_RATIO", "RPM", "meshing_frequency",
            "chain_speed", "tension_limit", "centrifugal_speed_limit", "span_axial_frequency",
-           "speed_for_meshing", "span_string_frequency", "nearest_span_resonance"]
+           "speed_for_meshing", "span_string_frequency", "drive_string_frequency",
+           "nearest_span_resonance"]
 
 #: largest span strain T / (k_link p) the models hold to
 STRAIN_LIMIT = 0.05
@@ -99,6 +100,17 @@ def span_string_frequency(length: float, tension: float, speed: float, rho: floa
         return 0.0
     f = math.sqrt(elastic / rho) / (2.0 * length)
     return f * math.sqrt(elastic / tension) if moving else f
+
+
+def drive_string_frequency(drive: Drive, params: Mapping[str, Any], tension: float,
+                           speed: float) -> float:
+    """First transverse natural frequency [Hz] of a span of ``drive`` at the reported tension
+    ``tension`` [N] with the driver turning at ``speed`` [rad/s]: :func:`span_string_frequency`
+    of the moving string over the spans' tooth-period-mean length
+    (:func:`chainmodel.models.chain_inertia.mean_span_length`)."""
+    from .chain_inertia import mean_span_length
+    return span_string_frequency(mean_span_length(drive), tension, chain_speed(drive, speed),
+                                 params["chain.link_mass"] / drive.pitch, moving=True)
 
 
 def nearest_span_resonance(meshing: float, first_modes: Mapping[str, float],
