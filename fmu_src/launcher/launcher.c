@@ -11,7 +11,17 @@
  *    the executable, so Python's own path calculation finds its home, a venv's pyvenv.cfg and
  *    site-packages, and site runs the .pth files (editable installs); PYTHONMALLOC=malloc if
  *    unset; no signal handlers of Python's (the host keeps its own);
- * 3. loads pythonfmu's binary and forwards every FMI call to it.
+ * 3. loads pythonfmu's binary and forwards every FMI call to it, through a thin instance of its
+ *    own that mends three places where pythonfmu 0.7 departs from FMI 2.0 (section 4.2):
+ *    - fmi2GetBooleanStatus(fmi2Terminated) is false: pythonfmu sets it on every discarded step,
+ *      and a master that asks after fmi2Discard (Reference-FMUs' fmusim does) would then end the
+ *      run early with status OK, where the FMU meant "retry this step" (section 4.2.3);
+ *    - fmi2Fatal becomes fmi2Error, returned and logged: pythonfmu reports every Python
+ *      exception as fatal ("irreparably corrupted for all FMU instances", section 2.1.3),
+ *      though it concerns one instance (a bad parameter, a state that cannot be restored);
+ *      some hosts abort the whole process on fmi2Fatal;
+ *    - fmi2DoStep before fmi2ExitInitializationMode or after fmi2Terminate is refused with
+ *      fmi2Error and a logged message (the state machine of section 4.2.4); pythonfmu steps.
  *
  * Exit. pythonfmu 0.7's binary releases its interpreter guard twice at process exit (its static
  * std::shared_ptr's destructor, then its ELF destructor calling finalizePythonInterpreter on the
@@ -303,6 +313,52 @@ static void load(void)
 
 /* --- FMI 2.0 ------------------------------------------------------------------------------ */
 
+/* Where an instance is in FMI 2.0's co-simulation state machine (section 4.2.4), as far as the
+ * launcher saw it; UNKNOWN after fmi2SetFMUstate (the state restored carries its own phase,
+ * which the backend knows). */
+enum phase { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED, UNKNOWN };
+static const char *const PHASE_NAMES[] = {"after fmi2Instantiate or fmi2Reset",
+                                          "in initialization mode", "stepping",
+                                          "after fmi2Terminate", "unknown"};
+
+/* The fmi2Component the host holds: the backend's, the host's callbacks and the phase. */
+typedef struct {
+    fmi2Component backend;
+    fmi2CallbackFunctions host;      /* the host's callbacks, as given */
+    fmi2CallbackFunctions to_backend; /* the same with the logger below (the backend keeps a
+                                         pointer to it: it lives as long as the instance) */
+    char name[256];
+    enum phase phase;
+} Instance;
+
+/* The backend's logger calls, with fmi2Fatal logged as fmi2Error. pythonfmu passes the message
+ * as the format and no arguments; it is forwarded the same way. */
+static void backend_logger(fmi2ComponentEnvironment env, fmi2String instanceName,
+                           fmi2Status status, fmi2String category, fmi2String message, ...)
+{
+    Instance *in = (Instance *)env;
+    if (in->host.logger)
+        in->host.logger(in->host.componentEnvironment, instanceName,
+                        status == fmi2Fatal ? fmi2Error : status,
+                        status == fmi2Fatal && category == NULL ? "logStatusError" : category,
+                        message);
+}
+
+static void log_error(Instance *in, const char *fmt, ...)
+{
+    char text[1024];
+    va_list ap;
+    if (!in->host.logger)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    in->host.logger(in->host.componentEnvironment, in->name, fmi2Error, "logStatusError", "%s",
+                    text);
+}
+
+static fmi2Status mend(fmi2Status s) { return s == fmi2Fatal ? fmi2Error : s; }
+
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
@@ -311,6 +367,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn)
 {
+    Instance *in;
     pthread_once(&load_once, load);
     if (!loaded) {
         if (functions && functions->logger)
@@ -318,12 +375,45 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               "logStatusError", "%s", problem);
         return NULL;
     }
-    return p_fmi2Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions,
-                             visible, loggingOn);
+    if (!functions) /* FMI 2.0 requires the callbacks; the backend would crash without them */
+        return NULL;
+    in = (Instance *)calloc(1, sizeof *in);
+    if (!in) {
+        if (functions->logger)
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
+                              "logStatusError", "%s", FMU_NAME ": out of memory");
+        return NULL;
+    }
+    in->host = *functions;
+    in->to_backend = *functions;
+    in->to_backend.logger = backend_logger;
+    in->to_backend.componentEnvironment = in;
+    snprintf(in->name, sizeof in->name, "%s", instanceName ? instanceName : "");
+    in->phase = INSTANTIATED;
+    in->backend = p_fmi2Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                    &in->to_backend, visible, loggingOn);
+    if (!in->backend) {
+        free(in);
+        return NULL;
+    }
+    return in;
 }
 
-/* every other call: to the backend (no instance can exist without it) */
-#define CALL(name, ...) return p_##name ? p_##name(__VA_ARGS__) : fmi2Error
+/* every other call: to the backend (no instance can exist without it), fmi2Fatal as fmi2Error */
+#define IN ((Instance *)c)
+#define CALL(name, c, ...) \
+    return p_##name && (c) ? mend(p_##name(IN->backend, ##__VA_ARGS__)) : fmi2Error
+/* the same, moving to phase `next` when the call succeeds */
+#define CALL_TO(next, name, c, ...) \
+    do { \
+        fmi2Status s_; \
+        if (!p_##name || !(c)) \
+            return fmi2Error; \
+        s_ = mend(p_##name(IN->backend, ##__VA_ARGS__)); \
+        if (s_ == fmi2OK || s_ == fmi2Warning) \
+            IN->phase = (next); \
+        return s_; \
+    } while (0)
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
                                const fmi2String categories[])
@@ -331,8 +421,11 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
 
 void fmi2FreeInstance(fmi2Component c)
 {
+    if (!c)
+        return;
     if (p_fmi2FreeInstance)
-        p_fmi2FreeInstance(c);
+        p_fmi2FreeInstance(IN->backend);
+    free(c);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
@@ -342,11 +435,11 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
        stopTime); }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
-{ CALL(fmi2EnterInitializationMode, c); }
+{ CALL_TO(INITIALIZING, fmi2EnterInitializationMode, c); }
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
-{ CALL(fmi2ExitInitializationMode, c); }
-fmi2Status fmi2Terminate(fmi2Component c) { CALL(fmi2Terminate, c); }
-fmi2Status fmi2Reset(fmi2Component c) { CALL(fmi2Reset, c); }
+{ CALL_TO(STEPPING, fmi2ExitInitializationMode, c); }
+fmi2Status fmi2Terminate(fmi2Component c) { CALL_TO(TERMINATED, fmi2Terminate, c); }
+fmi2Status fmi2Reset(fmi2Component c) { CALL_TO(INSTANTIATED, fmi2Reset, c); }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                        fmi2Real value[])
@@ -376,7 +469,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
 { CALL(fmi2GetFMUstate, c, state); }
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
-{ CALL(fmi2SetFMUstate, c, state); }
+{ CALL_TO(UNKNOWN, fmi2SetFMUstate, c, state); }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state)
 { CALL(fmi2FreeFMUstate, c, state); }
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size)
@@ -403,7 +496,14 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
                                         size_t n, const fmi2Integer order[], fmi2Real value[])
 { CALL(fmi2GetRealOutputDerivatives, c, vr, n, order, value); }
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior)
-{ CALL(fmi2DoStep, c, t, h, noSetPrior); }
+{
+    if (c && IN->phase != STEPPING && IN->phase != UNKNOWN) {
+        log_error(IN, "fmi2DoStep called %s; FMI 2.0 allows it only between "
+                  "fmi2ExitInitializationMode and fmi2Terminate", PHASE_NAMES[IN->phase]);
+        return fmi2Error;
+    }
+    CALL(fmi2DoStep, c, t, h, noSetPrior);
+}
 fmi2Status fmi2CancelStep(fmi2Component c) { CALL(fmi2CancelStep, c); }
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 { CALL(fmi2GetStatus, c, s, value); }
@@ -412,6 +512,13 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
 { CALL(fmi2GetIntegerStatus, c, s, value); }
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
-{ CALL(fmi2GetBooleanStatus, c, s, value); }
+{
+    if (c && s == fmi2Terminated && value) {   /* the FMU never asks to end: a discarded step
+                                                  may be retried (see the top of this file) */
+        *value = fmi2False;
+        return fmi2OK;
+    }
+    CALL(fmi2GetBooleanStatus, c, s, value);
+}
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 { CALL(fmi2GetStringStatus, c, s, value); }
