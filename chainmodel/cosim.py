@@ -11,7 +11,11 @@ It also watches the coupling (:class:`CouplingWatch`): an explicit co-simulation
 model's inertia with this drive's stiff input-shaft spring is unstable above a communication
 step of about :data:`JACOBI_CONSTANT` / omega_c (:func:`stable_step`); the session then refuses
 the step with a message that says so and names the step that holds (docs/fmu.md, "In a system
-model"). No physics here beyond that coupling estimate: the models do the rest.
+model"); ``watch_coupling = False`` (the FMU's ``coupling.watch``) turns that off for inputs that
+are prescribed, not fed back. And it checks the angle input against where the held input carried
+it (:meth:`CosimSession.model_angle`): a jump by whole turns is a master restarting its angle
+count and is taken out; any other jump beyond half a driver tooth is refused, naming the input.
+No physics here beyond that coupling estimate: the models do the rest.
 """
 
 from __future__ import annotations
@@ -31,10 +35,11 @@ INPUTS = ("input_shaft.angle", "input_shaft.speed", "load.torque")
 #: units of the FMU adapter's Real coupling.* variables (build_fmu.py writes them)
 FMU_UNITS = {"coupling.motor_inertia": "kg.m2", "coupling.max_step": "s"}
 #: the FMU adapter's parameters of the coupling (names)
-FMU_PARAMETERS = ("coupling.motor_inertia", "input_shaft.include_drive_inertia")
+FMU_PARAMETERS = ("coupling.motor_inertia", "input_shaft.include_drive_inertia",
+                  "coupling.watch")
 
 __all__ = ["INPUTS", "FMU_UNITS", "FMU_PARAMETERS", "CosimSession", "CouplingUnstable", "CouplingWatch", "stable_step", "coupling_frequency",
-           "JACOBI_CONSTANT", "GAUSS_SEIDEL_CONSTANT"]
+           "JACOBI_CONSTANT", "GAUSS_SEIDEL_CONSTANT", "angle_jump_tolerance"]
 
 #: h_max * omega_c at which the explicit Jacobi coupling of a motor rotor J (fed the held
 #: input_shaft.torque) and this drive (fed the held rotor angle and speed) loses stability:
@@ -71,6 +76,14 @@ def stable_step(motor_inertia: float, params: Mapping, scheme: str = "jacobi") -
     c = JACOBI_CONSTANT if scheme == "jacobi" else GAUSS_SEIDEL_CONSTANT
     return c / coupling_frequency(motor_inertia, params["driver.inertia"],
                                   params["input_shaft.stiffness"])
+
+
+def angle_jump_tolerance(n_driver: int, speed_change: float, step: float) -> float:
+    """Largest difference [rad] between a new input_shaft.angle and where the held input
+    carried the old one (angle + speed x step) that a consistent master can produce: half a
+    driver tooth angle, pi / n_driver, plus |speed change| x step (the first-order hold's error
+    for a speed that moved monotonically within the step is at most that)."""
+    return math.pi / n_driver + abs(speed_change) * step
 
 
 class CouplingUnstable(SimulationDiverged):
@@ -201,6 +214,11 @@ class CosimSession:
         #: input's acceleration; level 0 and input_shaft.rigid), the motor model carries it
         self.include_drive_inertia = True
         self.watch = CouplingWatch()
+        #: False: no coupling watch (inputs prescribed open loop; the FMU's coupling.watch)
+        self.watch_coupling = True
+        #: whole turns between the master's angle count and the model's at the last step (a
+        #: master restarting its count, :meth:`model_angle`)
+        self.turns_removed = 0
 
     # --- inputs --------------------------------------------------------------------------------
     def set_inputs(self, angle: float, speed: float, torque: float,
@@ -223,7 +241,37 @@ class CosimSession:
             return tuple(float(v) for v in st.model.motor_outputs(st.x))
         if st is not None and not fresh:
             return st.inputs.angle, st.inputs.speed
-        return self.angle, self.speed
+        return self.model_angle(), self.speed
+
+    def model_angle(self) -> float:
+        """input_shaft.angle as the model takes it. Compared with where the held input carried
+        the last one (the stepper's held angle at the current time): a difference of whole
+        turns, to within :func:`angle_jump_tolerance`, is a master restarting its angle count
+        (wrapping a rotor angle to one turn) and is taken out, so the drive turns on; any other
+        difference beyond that tolerance raises ValueError naming the input (a jump of the
+        angle its speed does not explain would wind the input-shaft spring by it)."""
+        st, angle = self.stepper, self.angle
+        if (st is None or self.torque_causal or not math.isfinite(angle)
+                or not math.isfinite(self.speed)):    # non-finite inputs: refused by the step
+            return angle
+        held = st.inputs
+        d = angle - held.angle
+        step = st.t - self.prev_t if self.prev_t is not None else 0.0
+        tol = angle_jump_tolerance(self.drive.n_driver, self.speed - held.speed, step)
+        if abs(d) <= tol:
+            return angle
+        turns = round(d / (2.0 * math.pi))
+        if turns != 0 and abs(d - 2.0 * math.pi * turns) <= tol:
+            return angle - 2.0 * math.pi * turns
+        raise ValueError(
+            f"input input_shaft.angle = {angle:.9g} rad at t = {st.t:.9g} s is {d:+.6g} rad "
+            f"from where the held input carried it ({held.angle:.9g} rad: the last angle "
+            f"advanced at input_shaft.speed = {held.speed:.6g} rad/s), more than a master "
+            f"whose angle is the integral of its speed can produce ({tol:.3g} rad: half a "
+            f"driver tooth plus the speed change times the step) and not a whole number of "
+            "turns (a restart of the angle count, which is taken out): it would wind the "
+            "input-shaft spring by that angle at once; set input_shaft.angle continuous and "
+            "consistent with input_shaft.speed")
 
     def acceleration(self, t: float) -> float:
         """Backward difference of the speed input between communication points,
@@ -233,7 +281,7 @@ class CosimSession:
         return 0.0
 
     def inputs(self, t: float) -> Inputs:
-        return Inputs(self.angle, self.speed, self.torque, self.acceleration(t))
+        return Inputs(self.model_angle(), self.speed, self.torque, self.acceleration(t))
 
     # --- model ---------------------------------------------------------------------------------
     def build(self, params: dict, t: float, state=None, model=None) -> Built:
@@ -272,10 +320,11 @@ class CosimSession:
         """Every output (ALL_OUTPUTS order) at the current state for the inputs set (direct
         feedthrough); a buffer the next call reuses. Refused inputs raise ValueError."""
         st = self.stepper
-        row = st.outputs_held(self.angle, self.speed, self.acceleration(st.t), self.torque)
+        angle = self.model_angle()
+        row = st.outputs_held(angle, self.speed, self.acceleration(st.t), self.torque)
         if self.include_drive_inertia:
             return row
-        return self._without_drive_inertia(row, self.angle, self.speed, self.torque)
+        return self._without_drive_inertia(row, angle, self.speed, self.torque)
 
     def _without_drive_inertia(self, row: np.ndarray, angle, speed, torque) -> np.ndarray:
         """``row`` (a copy) with input_shaft.torque of the same state and inputs but zero input
@@ -297,25 +346,27 @@ class CosimSession:
         st = self.stepper
         # the watch takes the inputs of this point even when the step then fails: a master
         # retrying the point with the same inputs adds a zero increment, which it skips
-        growing = self.watch.update((self.speed, self.torque))
+        growing = self.watch.update((self.speed, self.torque)) if self.watch_coupling else None
         if growing is not None:
             raise CouplingUnstable(self.coupling_message(t, h, growing))
         t_to = t + h if t_end is None else t_end
+        angle = self.model_angle()
         try:
             if self.torque_causal:
                 out = st.advance(t_to, Inputs(0.0, 0.0, self.torque, 0.0, self.motor_torque))
                 row = np.array([out[o.name] for o in self._M.ALL_OUTPUTS])
             else:
-                row = st.advance_held(t_to, self.angle, self.speed, self.acceleration(t),
+                row = st.advance_held(t_to, angle, self.speed, self.acceleration(t),
                                       self.torque)
         except (SimulationDiverged, ValueError) as exc:
-            suspect = self.watch.suspect()
+            suspect = self.watch.suspect() if self.watch_coupling else None
             if suspect is not None:   # the failure is the coupling's: its advice is not ours
                 what = str(exc).split(";")[0]
                 raise CouplingUnstable(self.coupling_message(t, h, suspect)
                                        + f" (The step itself failed: {what}.)") from exc
             raise
         self.prev_t, self.prev_speed = t, self.speed
+        self.turns_removed = round((self.angle - angle) / (2.0 * math.pi))
         if not self.include_drive_inertia:
             u = st.inputs      # the held inputs at t + h
             row = self._without_drive_inertia(row, u.angle, u.speed, u.torque)
@@ -351,7 +402,9 @@ class CosimSession:
         else:
             text += ("The load model's torque depends on this drive's outputs: use a smaller "
                      "communication step or let the load model integrate the driven inertia. ")
-        return text + f"Step discarded; the FMU stays at t = {t:.9g} s."
+        return text + (f"Step discarded; the FMU stays at t = {t:.9g} s. If the master feeds "
+                       "nothing back (the inputs are prescribed and really oscillate so), set "
+                       "coupling.watch = false.")
 
     # --- state ---------------------------------------------------------------------------------
     def get_state(self) -> dict:

@@ -208,7 +208,12 @@ class ChainDrive(Fmi2Slave):
                           "input_shaft.torque includes the drive's inertia torque (the part "
                           "proportional to the input's acceleration, at fidelity 0 and with "
                           "input_shaft.rigid); false leaves it to the motor model and removes "
-                          "the feedthrough I_eff/h of input_shaft.speed"), **auto))
+                          "the feedthrough I_eff/h of input_shaft.speed"), **auto),
+            self._add(Boolean, "coupling.watch", True, self._bool, description=(
+                "refuse a step whose inputs (input_shaft.speed, load.torque) oscillate from "
+                "step to step with growing amplitude, the mark of an unstable explicit coupling "
+                "(docs/fmu.md, \"In a system model\"); false for inputs prescribed open loop that "
+                "really do so"), **auto))
         self._max_step_vr = self._add(
             Real, "coupling.max_step", 0.0, self._real, causality=Fmi2Causality.calculatedParameter,
             variability=Fmi2Variability.fixed, initial=Fmi2Initial.calculated, description=(
@@ -232,6 +237,7 @@ class ChainDrive(Fmi2Slave):
         self._params_changed = True
         self._stale = False          # outputs must be recomputed (inputs set) before read
         self._told_coupling = False  # an unstable coupling was written to stderr
+        self._told_turns = False     # a restart of the angle count was logged
         self._warned_outputs = False
 
     def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
@@ -366,12 +372,13 @@ class ChainDrive(Fmi2Slave):
             if choice.message != getattr(self, "_auto_message", None):
                 self._auto_message = choice.message
                 self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
-        J_vr, inertia_vr = self._coupling_vrs
+        J_vr, inertia_vr, watch_vr = self._coupling_vrs
         session.motor_inertia = self._real[J_vr]
         if not (session.motor_inertia >= 0 and math.isfinite(session.motor_inertia)):
             raise ValueError(f"parameter coupling.motor_inertia = {session.motor_inertia!r} "
                              "kg.m2 is not valid; valid: >= 0 (0: unknown)")
         session.include_drive_inertia = bool(self._bool[inertia_vr])
+        session.watch_coupling = bool(self._bool[watch_vr])
         built = session.build(params, t, state)
         h_max = (self._cosim.stable_step(session.motor_inertia, params)
                  if session.motor_inertia > 0 else math.inf)
@@ -482,6 +489,13 @@ class ChainDrive(Fmi2Slave):
             return False
         values = self._store_row(row)
         self._stale = False
+        if session.turns_removed and not self._told_turns:
+            self._told_turns = True
+            self.log(_fmi_text(
+                f"input_shaft.angle restarted its count by {session.turns_removed:+d} turn(s) "
+                f"at t = {current_time:.9g} s (whole turns from where its speed carried it): "
+                "taken as a restart, the drive's angles continue (logged once)"),
+                Fmi2Status.ok, "logAll")
         if session.torque_causal:   # the validity checks' input speed: the motor rotor's
             speed = session.motor_values()[1]
         self._check_validity(current_time + step_size, values, speed, session.torque)

@@ -237,3 +237,89 @@ def test_a_step_failing_during_a_fast_growing_oscillation_blames_the_coupling():
     text = str(err.value)
     assert "coupling unstable" in text and "The step itself failed" in text
     assert "lower speed" not in text and "fidelity 3" not in text
+
+
+# --- the angle input: restarts of its count and jumps its speed does not explain ----------------
+
+def _run_session(level, angles, h=1e-4, w=4 * math.pi, torque=20.0):
+    """Step a session at constant speed ``w`` with the angle input ``angles[k]`` at point k;
+    the rows after each step."""
+    session = CosimSession()
+    session.set_inputs(angles[0], w, torque)
+    session.build(P.validate({"fidelity": level}), 0.0)
+    rows = []
+    for k, a in enumerate(angles):
+        session.set_inputs(a, w, torque)
+        rows.append(session.step(k * h, h).copy())
+    return session, np.array(rows)
+
+
+@pytest.mark.parametrize("level", [0, 1])
+def test_a_restart_of_the_angle_count_by_whole_turns_is_the_same_motion(level):
+    """A master wrapping its rotor angle (-1 turn at point 10, -2 at point 20, as a counter kept
+    within one turn does): the same motion as the continuous angle, so the same outputs."""
+    h, w, n = 1e-4, 4 * math.pi, 30
+    angles = w * h * np.arange(n)
+    wrapped = angles - 2 * math.pi * (np.arange(n) >= 10) - 2 * math.pi * (np.arange(n) >= 20)
+    _, want = _run_session(level, angles, h, w)
+    session, got = _run_session(level, wrapped, h, w)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-6)
+    assert session.turns_removed == -2
+
+
+def test_an_angle_jump_its_speed_does_not_explain_is_refused_naming_the_input():
+    """Half a driver tooth (pi / 25 = 0.126 rad on xu2010) is the tolerance at constant speed:
+    0.05 rad off passes (a master's hold error), 0.3 rad is refused, the session stays at its
+    point and goes on with a consistent angle."""
+    h, w = 1e-4, 4 * math.pi
+    session, _ = _run_session(1, w * h * np.arange(5), h, w)
+    t, held = session.t, session.stepper.inputs.angle
+    session.set_inputs(held + 0.3, w, 20.0)
+    with pytest.raises(ValueError) as err:
+        session.step(t, h)
+    text = str(err.value)
+    assert "input_shaft.angle" in text and "+0.3 rad" in text and "0.126 rad" in text
+    assert session.t == t
+    session.set_inputs(held + 0.05, w, 20.0)
+    row = session.step(t, h)
+    assert np.all(np.isfinite(row)) and session.turns_removed == 0
+
+
+def test_a_consistent_speed_step_at_a_coarse_communication_step_is_not_a_jump():
+    """The first-order hold misses the angle a speed step gains within a communication step
+    (here 4 pi rad/s in the middle of a 20 ms step: 0.126 rad); the tolerance counts the speed
+    change times the step, so the exact integral of that speed passes."""
+    h, w = 0.02, 4 * math.pi
+    session = CosimSession()
+    session.set_inputs(0.0, 0.0, 0.0)
+    session.build(P.validate({"fidelity": 1}), 0.0)
+    session.step(0.0, h)
+    session.set_inputs(0.0, 0.0, 0.0)
+    session.step(h, h)                                  # the speed jumps at 1.5 h:
+    session.set_inputs(w * 0.5 * h, w, 0.0)             # its integral at 2 h
+    assert np.all(np.isfinite(session.step(2 * h, h)))
+
+
+def test_without_the_watch_prescribed_growing_inputs_run():
+    """coupling.watch = false: the inputs of the refused case above, prescribed open loop, run
+    (the watch cannot tell them from a coupling's; the user can)."""
+    params = P.validate({"fidelity": 1})
+    h, n = 5e-4, 30
+    speeds = 1e-2 * np.cumsum(1.2 ** np.arange(n) * np.cos(1.0 * np.arange(n)))
+    for watch in (True, False):
+        session = CosimSession()
+        session.watch_coupling = watch
+        session.set_inputs(0.0, 0.0, 0.0)
+        session.build(params, 0.0)
+        angle, refused = 0.0, False
+        for k, w in enumerate(speeds):
+            session.set_inputs(angle, float(w), 0.0)
+            try:
+                row = session.step(k * h, h)
+            except CouplingUnstable:
+                refused = True
+                break
+            assert np.all(np.isfinite(row))
+            angle += h * w
+        assert refused is watch
+

@@ -85,8 +85,10 @@ def test_motor_outputs_in_angle_causality_are_the_input_shaft(chaindrive_fmu_dir
         fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
         # after the step: the held input angle advanced at the held speed (first-order hold)
         assert fmu.getReal(vr[2:]) == pytest.approx([3.0 * 1e-3, 3.0], rel=1e-15)
-        fmu.setReal(vr[:2], [0.5, 4.0])             # set at the communication point: as set
-        assert fmu.getReal(vr[2:]) == [0.5, 4.0]
+        # set at the communication point: as set (0.05 rad ahead of the hold, within what a
+        # master's hold error may be; a jump beyond it is refused: tests/test_cosim.py)
+        fmu.setReal(vr[:2], [3.0 * 1e-3 + 0.05, 4.0])
+        assert fmu.getReal(vr[2:]) == [3.0 * 1e-3 + 0.05, 4.0]
     finally:
         fmu.freeInstance()
 
