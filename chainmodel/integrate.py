@@ -144,6 +144,8 @@ class Stepper(ABC):
         if inputs is None:
             inputs = self.inputs
         if isinstance(inputs, Inputs):
+            # refused inputs first: the span roles' filter divides by the speed
+            self.refuse_bad_inputs(inputs.angle, inputs.speed, inputs.torque)
             saved = self._hold_role(t_end, inputs.speed, inputs.acceleration, inputs.torque)
             try:
                 row = self._advance_held(t_end, inputs.angle, inputs.speed,
@@ -168,6 +170,7 @@ class Stepper(ABC):
         One compiled call where the model and method have one; the same numbers as
         :meth:`advance` with ``Inputs(angle, speed, torque, acceleration)``."""
         t_end = self._check_time(t_end)
+        self.refuse_bad_inputs(angle, speed, torque)     # before the roles' filter, as above
         saved = self._hold_role(t_end, speed, acceleration, torque)
         try:
             row = self._advance_held(t_end, angle, speed, acceleration, torque)
