@@ -321,6 +321,7 @@ def _search_pretension(level: int, drive: Drive, params: dict, target: float) ->
 
 _STATIC_NOTE = "for a static span tension of"
 _CHAIN_NOTE = "no chain named: ISO 606"
+_CHANGED_NOTE = "drive changed from"
 
 
 @dataclass
@@ -588,6 +589,14 @@ class Scene:
         notes = list(self.notes)
         if static is None:
             notes = [n for n in notes if _STATIC_NOTE not in n]
+        changed = [k for k in sorted(params) if k.startswith("drive.")
+                   and params[k] != self.parameters.get(k)]
+        if changed:   # another drive: what the scene said of its own no longer applies
+            notes = [n for n in notes if _STATIC_NOTE in n or n.startswith(_CHAIN_NOTE)
+                     or n.startswith(_CHANGED_NOTE)]
+            notes = [n for n in notes if not n.startswith(_CHANGED_NOTE)] + [
+                f"{_CHANGED_NOTE} {self.name}'s ({', '.join(changed)} given): its notes on "
+                "the drive are dropped"]
         return Scene(self.name, params, op, duration, interval, notes, static, chain=chain,
                      origins=origins)
 

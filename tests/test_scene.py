@@ -262,3 +262,16 @@ def test_a_chain_value_far_from_its_iso_chain_is_questioned():
     assert load_scene("xu2010", chain_link_mass=20 * min(refs.values())).implausible_chain_values() == []
     for preset_name in preset_names():
         assert load_scene(preset_name).implausible_chain_values() == [], preset_name
+
+
+def test_a_drive_changed_from_a_preset_drops_the_presets_notes_on_its_drive():
+    """xu2010's note ("centre distance 197.7 mm as in the paper") is false for an 11/57 drive
+    built on it: it goes, and the notes say which drive values were given."""
+    base = Scene.from_preset("xu2010")
+    assert any("197.7 mm" in n for n in base.notes)
+    assert base.with_overrides(input_speed_rpm=300).notes == base.notes   # same drive
+    other = base.with_overrides(parameters={"drive.driver_teeth": 11, "drive.driven_teeth": 57,
+                                            "drive.links": 111})
+    assert not any("197.7 mm" in n for n in other.notes)
+    assert any("drive.driver_teeth" in n and "drive.links" in n and "xu2010" in n
+               for n in other.notes)
