@@ -321,8 +321,13 @@ def test_kernels_match_the_numpy_oracle(extra):
         r2, o2 = oracle.OracleModel.rhs(model, t, x, u), oracle.outputs_numpy(model, t, x, u)
         spans2 = oracle._evaluate(model, t, x, u)[3:]
         engaged2 = model._engaged(x)      # on the oracle's seat search, left in model.ws
-        # round-off of positions (1e-17 m) times k_c / m (5e8 1/s^2) is the floor
-        assert np.max(np.abs(r1 - r2)) < 1e-10 * np.max(np.abs(r1))
+        # round-off of positions (eps |x|, 4e-17 m) times k_c / m (5e8 1/s^2) is the floor,
+        # a few times over for the sums (from rest, since level 3 starts in its statics,
+        # the accelerations are small and that floor, not 1e-10 of them, decides)
+        p = model.params
+        floor = 8 * np.finfo(float).eps * np.max(np.abs(x[:len(x) // 2])) * (
+            p["contact.stiffness"] / p["chain.link_mass"])
+        assert np.max(np.abs(r1 - r2)) < 1e-10 * np.max(np.abs(r1)) + floor
         for k in o1:
             assert o1[k] == pytest.approx(o2[k], rel=1e-9, abs=1e-9), k
         assert np.array_equal(s1["contact_sprocket"], model.ws.side)

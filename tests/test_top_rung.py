@@ -126,16 +126,25 @@ def test_level3_running_span_rise_is_its_spans_bowing():
     """Geometric compatibility of level 3's running spans (docs/reduced_models.md, "The 16B
     mixer"): from 20 to 200 rpm both of the 16B mixer's spans rise by the same amount, and
     that rise is the spans' excess length over their chords (from the rollers' positions)
-    times the two spans' stiffness in series (each span's links in series with the seat ladder
-    at both ends, the module docstring's K_seat, from the chain's values), within 20 %. The
-    rollers on the sprockets stay where they were (no riding up the teeth)."""
+    times the two spans' stiffness in series. With each span's links in series with the seat
+    ladder at both ends (the module docstring's K_seat, from the chain's values: seats at
+    contact, no clearance or flank play, the stiffest the ends can be) that is an upper bound;
+    with the ends' compliance of level 3's own statics (the wrap fit levels 0-2 take, clearance
+    and flanks included) it is met within 15 %. The rollers on the sprockets stay where they
+    were (no riding up the teeth). (Before level 3 started in its loaded statics, twenty-second
+    session, the load's start-up ring added to the rise: 100 N and more, within 20 % of the
+    ladder's estimate; now 67 N.)"""
     path = "examples/scenes/16b_mixer.toml"
     sc = load_scene(path, fidelity=3)
-    p, r = sc.parameters, sc.with_overrides(fidelity=1).model().reference
+    level1 = sc.with_overrides(fidelity=1).model()
+    p, r = sc.parameters, level1.reference
     kl, kc = p["chain.link_stiffness"], p["contact.stiffness"]
     k_seat = 0.5 * (kc + math.sqrt(kc * kc + 4.0 * kc * kl))
-    k_up, k_low = (1.0 / (r["n_" + s] / kl + 2.0 / k_seat) for s in ("up", "low"))
-    series = k_up * k_low / (k_up + k_low)
+
+    def in_series(ends):
+        k_up, k_low = (1.0 / (r["n_" + s] / kl + ends) for s in ("up", "low"))
+        return k_up * k_low / (k_up + k_low)
+    ladder, wrap = in_series(2.0 / k_seat), in_series(level1.series_compliance()[0])
     centres = sc.model()._centres
     runs = {}
     for rpm in (20.0, 200.0):
@@ -152,7 +161,8 @@ def test_level3_running_span_rise_is_its_spans_bowing():
                      res["slack_span.tension"][w].mean(), float(np.mean(seated)))
     d_len = runs[200.0][0] - runs[20.0][0]
     d_tight, d_slack = (runs[200.0][k] - runs[20.0][k] for k in (1, 2))
-    assert d_slack > 100.0, "the mixer's slack span no longer rises: the test checks nothing"
+    assert d_slack > 30.0, "the mixer's slack span no longer rises: the test checks nothing"
     assert abs(d_tight - d_slack) < 0.05 * d_slack
-    assert abs(series * d_len - d_slack) < 0.2 * d_slack, (series * d_len, d_slack)
+    assert d_slack < 1.05 * ladder * d_len, (ladder * d_len, d_slack)
+    assert abs(wrap * d_len - d_slack) < 0.15 * d_slack, (wrap * d_len, d_slack)
     assert abs(runs[200.0][3] - runs[20.0][3]) < 1e-5      # 10 um: the seated rollers stay

@@ -148,9 +148,6 @@ def articulation_cut(teeth: int, pitch: float, gamma: float, tip: float, roller_
 
 #: settled static tensions per (drive, parameters): a scene's every run asks for the same one
 _STATIC_CACHE: dict = {}
-#: a span whose sag softens it at rest by more than this (Ernst's 2 k_span S / T^3) in the
-#: straight layout makes the chain start from its statics (MultibodyModel.hangs_on_its_weight)
-SAG_START = 0.1
 
 
 class MultibodyModel(Model):
@@ -275,57 +272,60 @@ class MultibodyModel(Model):
             return phi2_k
 
     def initial_state(self, u: Inputs) -> np.ndarray:
-        """At rest, the chain wrapped with straight spans (:meth:`straight_layout`). Two chains
-        start from their static equilibrium instead, their spans hanging in their sag
-        (:func:`~chainmodel.models.multibody_statics.static_state`, no load, the driver at
-        u.angle):
+        """At rest in the model's static equilibrium
+        (:func:`~chainmodel.models.multibody_statics.static_state`): rollers in their seats and
+        spans in their sag, the driven sprocket loaded by ``u.torque``, the driver at
+        ``u.angle`` less the input shaft's twist under that load. Levels 0-2 start from their
+        loaded equilibrium too (``TorsionalModel.initial_state``), so the ladder's runs share
+        their start, and a start-up is the inputs' own, not:
 
-        * a chain too long for straight spans (a link shorter than its free length by more
-          than the pin-bushing play: its plates would bear): from the straight layout it
-          starts with its links in compression (112 kN on xu2010 with two links too many), a
-          start-up shock the load did not cause;
-        * a chain whose weight sets its tension (:meth:`hangs_on_its_weight`): from straight
-          spans it drops into its sag and rings for the whole run (an 08A 12/36 drive with no
-          pretension, held at rest for 1 s, swung between 0 and 115 N about a 44 N mean
-          against its static 56.5 N, and the ring-down of a 16B drive carried the sag's swing).
+        * the load stepping onto an unloaded chain: a 12B 20/40 drive at 10 rpm and 5 % of its
+          breaking load rang for 2 s with 60-160x level 1's driven-speed ripple (an audit,
+          twenty-second session of issue 21), and C1's means over 0.6-1.2 s at 60 rpm carried
+          that ring, -1.6 / -3.1 % on its spans against this start (docs/multibody.md, "Start");
+        * the straight spans' release where the chain must stretch over the wrap (xu2010 at
+          197.7 mm: 1238 N in both spans at t = 0, 0 N 0.2 ms later, then a ring for 10 ms);
+        * a chain too long for straight spans starting with its links in compression (112 kN
+          on xu2010 with two links too many), or one its weight holds dropping into its sag.
 
-        Where the statics find no equilibrium, the straight layout."""
-        x = self.straight_layout(u)
-        n = 2 + 2 * self.M
-        z = x[2:n].reshape(self.M, 2)
-        length = np.hypot(*(np.roll(z, -1, axis=0) - z).T)
-        if (np.min(length) >= self.P[K.I_L0] - self.P[K.I_GAP]
-                and not self.hangs_on_its_weight(length)):
-            return x
+        Where the statics find no equilibrium under the load (a chain so long that the load
+        drags it over the teeth), the unloaded one; where they find none at all, the rigid
+        layout of :meth:`straight_layout`."""
         from .multibody_statics import static_state
-        try:
-            sol = (self.static_solution() if float(u.angle) == 0.0
-                   else static_state(self, float(u.angle), long_solve=True))
-        except ValueError:
-            sol = None
+        load = float(u.torque)
+        sol = None
+        for m in ((load, 0.0) if load != 0.0 else (0.0,)):
+            try:   # under the load, else (a chain the load drags over the teeth) without it
+                sol = (self.static_solution() if float(u.angle) == 0.0 and m == 0.0
+                       else static_state(self, float(u.angle), m, long_solve=True))
+            except ValueError:
+                continue
+            if sol is not None:
+                load = m
+                break
+        if sol is not None and not self.params["input_shaft.rigid"]:
+            # the driver where the shaft spring carries the chain's torque on it:
+            # k_r (angle - phi_1) + T_chain = 0, T_chain from the accelerations at rest
+            twist = self._chain_torque_on_driver(sol.state, u) / self.params[
+                "input_shaft.stiffness"]
+            try:
+                if twist != 0.0:
+                    sol = static_state(self, float(u.angle) + twist, load, long_solve=True)
+            except ValueError:
+                pass     # the untwisted equilibrium: the shaft spring's own start-up only
         if sol is None:
-            return x
+            return self.straight_layout(u)
         rest = np.array(sol.state, float)
-        rest[n:] = 0.0
+        rest[2 + 2 * self.M:] = 0.0
         return rest
 
-    def hangs_on_its_weight(self, length: np.ndarray) -> bool:
-        """Whether the straight layout's chain, its links ``length`` long [m], is held by its
-        weight more than by its stretch: its links' mean tension T (the stretch beyond their
-        free length, k (l - l_0)) is zero, or a span's sag softens it at rest by more than
-        ``SAG_START`` (Ernst's equivalent modulus: 2 k_span S / T^3 > SAG_START, S = w_n^2 L^3
-        / 24 the span's parabola, k_span = k / n its links in series; docs/multibody.md
-        "Initial state"). A pretensioned drive (xu2010, C1: 0.002-0.03) starts straight."""
-        from .span_sag import span_terms
-        k = self.params["chain.link_stiffness"]
-        tension = k * float(np.mean(np.maximum(length - self.P[K.I_L0], 0.0)))
-        sags = span_terms(self.drive, self.params)
-        if not max(sags) > 0.0:
-            return False
-        if not tension > 0.0:
-            return True
-        links = (max(self._n_upper, 1), max(self._n_lower, 1))
-        return max(2.0 * k / n * s / tension ** 3 for s, n in zip(sags, links)) > SAG_START
+    def _chain_torque_on_driver(self, x: np.ndarray, u: Inputs) -> float:
+        """The chain's torque on the driver [N m] in state ``x`` at rest, the shaft spring
+        relaxed (its input angle at the driver's): driver inertia times its acceleration."""
+        rest = np.array(x, float)
+        rest[2 + 2 * self.M:] = 0.0
+        a = self.rhs(0.0, rest, Inputs(float(rest[0]), 0.0, float(u.torque), 0.0))
+        return self.params["driver.inertia"] * float(a[2 + 2 * self.M])
 
     def hold_role(self, hold: float) -> None:
         self.P[K.I_ROLE] = float(hold)
