@@ -233,9 +233,11 @@ def centre_distance_for_links(n_driver: int, n_driven: int, pitch: float, links:
     except ValueError:
         lo_val = math.nan
     if not (lo_val < 0):
+        need = ("" if not math.isfinite(lo_val)
+                else f" (it needs at least {math.floor(lo_val + links) + 1} links there)")
         raise ValueError(
             f"a chain of {links} links (drive.links) is too short to wrap sprockets of {n_driver} and "
-            f"{n_driven} teeth at any centre distance that keeps them apart; use more links")
+            f"{n_driven} teeth at any centre distance that keeps them apart{need}; use more links")
     # each extra pitch of tangent length adds about two pitches of wrapping length
     x_hi = x_lo + max(links / 2.0, 2.0)
     x = brentq(excess, x_lo, x_hi, xtol=1e-12, rtol=1e-14)

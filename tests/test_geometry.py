@@ -154,3 +154,14 @@ def test_centre_distance_below_one_whole_span_pitch():
     assert f"{2 * p:.6g} m" in msg
     d = Drive.from_centre_distance(3, 3, p, 2 * p * (1 + 1e-9))
     assert d.span_pitches == 1
+
+
+def test_too_few_links_names_the_least_that_wraps():
+    """A 20/40 drive of 14 links: the message names the least link count that wraps the
+    sprockets at all, and that count does (one fewer does not)."""
+    with pytest.raises(ValueError, match=r"14 links.*too short") as err:
+        Drive.from_links(n_driver=20, n_driven=40, pitch=0.0127, links=14)
+    least = int(re.search(r"at least (\d+) links", str(err.value)).group(1))
+    assert Drive.from_links(n_driver=20, n_driven=40, pitch=0.0127, links=least).links == least
+    with pytest.raises(ValueError, match=rf"at least {least} links"):
+        Drive.from_links(n_driver=20, n_driven=40, pitch=0.0127, links=least - 1)
