@@ -49,13 +49,19 @@ import uuid
 from pathlib import Path
 
 __all__ = ["ENV_VAR", "cache_root", "cached_njit", "source_stamp", "info", "clear",
-           "COMPILE_NOTICE"]
+           "COMPILE_NOTICE", "UNCACHED_NOTICE"]
 
 ENV_VAR = "CHAINMODEL_CACHE_DIR"
 
 #: printed once per process, on stderr, before the first kernel is compiled
 COMPILE_NOTICE = ("chainmodel: compiling the numba kernels for this machine, once (about "
                   "{seconds}); later runs load them from {where}")
+#: printed instead when the cache folder cannot be written (its reason): every process compiles
+UNCACHED_NOTICE = ("chainmodel: compiling the numba kernels (about {seconds}) in this process: "
+                   "the kernel cache folder {where} cannot be used ({why}), so every process "
+                   "compiles them; set {env} to a writable folder (docs/numba_cache.md)")
+#: why the cache folder could not be used, when it could not (None: it can)
+_cache_problem: str | None = None
 #: measured first-use compile times (docs/numba_cache.md): levels 1-2 about 15 s, level 3 about
 #: 25 s, all levels about 60 s on a 2-core machine
 _COMPILE_ESTIMATE = "10-60 s, depending on the fidelity level"
@@ -188,8 +194,11 @@ def _announce() -> None:
     global _announced
     if not _announced:
         _announced = True
-        print(COMPILE_NOTICE.format(seconds=_COMPILE_ESTIMATE, where=cache_root()),
-              file=sys.stderr, flush=True)
+        text = (COMPILE_NOTICE.format(seconds=_COMPILE_ESTIMATE, where=cache_root())
+                if _cache_problem is None else
+                UNCACHED_NOTICE.format(seconds=_COMPILE_ESTIMATE, where=cache_root(),
+                                       why=_cache_problem, env=ENV_VAR))
+        print(text, file=sys.stderr, flush=True)
 
 
 @contextlib.contextmanager
@@ -305,7 +314,10 @@ def cached_njit(fn=None, **options):
     try:
         cache = kernel_cache(fn)
         cache._impl.locator.ensure_cache_path()
-    except (OSError, ValueError):   # folder not writable, or a function without a source file
+    except (OSError, ValueError) as exc:   # folder not writable, or no source file
+        global _cache_problem
+        if isinstance(exc, OSError) and _cache_problem is None:
+            _cache_problem = f"{type(exc).__name__}: {exc}"
         cache = uncached()
     dispatcher._cache = cache
     return dispatcher

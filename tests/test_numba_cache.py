@@ -108,6 +108,22 @@ def test_compile_once_load_later_recompile_on_any_source_change(tmp_path):
     assert (again["value"], again["hits"], again["misses"]) == (17.0, 1, 0)
 
 
+def test_an_unusable_cache_folder_is_said_and_the_kernels_still_run(tmp_path):
+    """CHAINMODEL_CACHE_DIR naming a file (a leftover, a typo): the kernels compile and give
+    the toy's arithmetic, and the one line on stderr says the folder cannot be used and every
+    process compiles, naming the variable; before, it said "later runs load them from" a folder
+    that could not exist, and every process compiled in silence after that."""
+    write_toy(tmp_path / "a")
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the cache folder should be\n")
+    for _ in range(2):      # and so in every process
+        got, err = run_toy(tmp_path / "a", blocker)
+        assert got["value"] == 3.0 * 2.0 + 1.0 and got["misses"] == 1
+        assert err.count(NOTICE) == 1, err
+        assert "cannot be used" in err and "every process compiles" in err
+        assert "CHAINMODEL_CACHE_DIR" in err and "later runs load them" not in err
+
+
 def test_two_processes_compiling_at_once_are_safe(tmp_path):
     write_toy(tmp_path / "a")
     cache = tmp_path / "cache"
