@@ -283,20 +283,36 @@ def test_an_angle_jump_its_speed_does_not_explain_is_refused_naming_the_input():
     session.set_inputs(held + 0.05, w, 20.0)
     row = session.step(t, h)
     assert np.all(np.isfinite(row)) and session.turns_removed == 0
+    assert session.jump_noted == (pytest.approx(0.05), t)    # followed, and noted for a warning
+
+
+def test_the_angle_may_be_set_again_before_the_first_step():
+    """A master that reads outputs in initialization mode (a model is built for them) and then
+    sets the motor's start angle: no step has held any angle yet, so nothing is a jump."""
+    session = CosimSession()
+    session.set_inputs(0.0, 0.0, 20.0)
+    session.build(P.validate({"fidelity": 1}), 0.0)
+    session.outputs()
+    session.set_inputs(1.0, 0.0, 20.0)
+    session.build(P.validate({"fidelity": 1}), 0.0)           # fmi2ExitInitializationMode
+    assert np.all(np.isfinite(session.outputs()))
+    assert np.all(np.isfinite(session.step(0.0, 1e-4)))
 
 
 def test_a_consistent_speed_step_at_a_coarse_communication_step_is_not_a_jump():
     """The first-order hold misses the angle a speed step gains within a communication step
-    (here 4 pi rad/s in the middle of a 20 ms step: 0.126 rad); the tolerance counts the speed
-    change times the step, so the exact integral of that speed passes."""
+    (here 4 pi rad/s a quarter into a 20 ms step: 0.188 rad, more than half a tooth); the
+    tolerance counts the speed change times the step, so the exact integral of that speed
+    passes."""
     h, w = 0.02, 4 * math.pi
     session = CosimSession()
     session.set_inputs(0.0, 0.0, 0.0)
     session.build(P.validate({"fidelity": 1}), 0.0)
     session.step(0.0, h)
     session.set_inputs(0.0, 0.0, 0.0)
-    session.step(h, h)                                  # the speed jumps at 1.5 h:
-    session.set_inputs(w * 0.5 * h, w, 0.0)             # its integral at 2 h
+    session.step(h, h)                                  # the speed jumps at 1.25 h:
+    session.set_inputs(w * 0.75 * h, w, 0.0)            # its integral at 2 h, 0.188 rad,
+    assert w * 0.75 * h > math.pi / 25                  # beyond half a tooth alone
     assert np.all(np.isfinite(session.step(2 * h, h)))
 
 
