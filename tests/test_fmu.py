@@ -500,10 +500,21 @@ def test_do_step_outside_the_stepping_phase_is_an_error(chaindrive_fmu_dir):
         assert err.value.status == 3 and "initialization mode" in s.messages()
         s.fmu.exitInitializationMode()
         s.fmu.doStep(0.0, 1e-3)
+        stepping = s.fmu.getFMUstate()
         s.fmu.terminate()
+        ended = s.fmu.getFMUstate()
         with pytest.raises(FMICallException) as err:
             s.fmu.doStep(1e-3, 1e-3)
         assert err.value.status == 3 and "after fmi2Terminate" in s.messages()
+        # a state restores the phase it was taken in
+        s.fmu.setFMUstate(stepping)
+        s.fmu.doStep(1e-3, 1e-3)
+        s.fmu.setFMUstate(ended)
+        with pytest.raises(FMICallException) as err:
+            s.fmu.doStep(1e-3, 1e-3)
+        assert err.value.status == 3
+        s.fmu.freeFMUstate(stepping)
+        s.fmu.freeFMUstate(ended)
         s.fmu.reset()                                         # and the instance is reusable
         s.fmu.setupExperiment(startTime=0.0)
         s.fmu.enterInitializationMode()

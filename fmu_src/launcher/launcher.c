@@ -314,12 +314,16 @@ static void load(void)
 /* --- FMI 2.0 ------------------------------------------------------------------------------ */
 
 /* Where an instance is in FMI 2.0's co-simulation state machine (section 4.2.4), as far as the
- * launcher saw it; UNKNOWN after fmi2SetFMUstate (the state restored carries its own phase,
- * which the backend knows). */
+ * launcher saw it; after fmi2SetFMUstate the phase the state was taken in, UNKNOWN for a
+ * deserialized one (the backend then checks for itself). */
 enum phase { INSTANTIATED, INITIALIZING, STEPPING, TERMINATED, UNKNOWN };
 static const char *const PHASE_NAMES[] = {"after fmi2Instantiate or fmi2Reset",
                                           "in initialization mode", "stepping",
                                           "after fmi2Terminate", "unknown"};
+
+/* FMU states taken by fmi2GetFMUstate, each with the phase it was taken in, so that
+ * fmi2SetFMUstate restores the phase too (a deserialized state's is UNKNOWN) */
+#define SAVED_STATES 64
 
 /* The fmi2Component the host holds: the backend's, the host's callbacks and the phase. */
 typedef struct {
@@ -329,7 +333,38 @@ typedef struct {
                                          pointer to it: it lives as long as the instance) */
     char name[256];
     enum phase phase;
+    struct { fmi2FMUstate state; enum phase phase; } saved[SAVED_STATES];
 } Instance;
+
+static void remember_state(Instance *in, fmi2FMUstate state)
+{
+    int i, free_slot = -1;
+    for (i = 0; i < SAVED_STATES; i++) {
+        if (in->saved[i].state == state) {
+            in->saved[i].phase = in->phase;
+            return;
+        }
+        if (!in->saved[i].state && free_slot < 0)
+            free_slot = i;
+    }
+    if (free_slot >= 0) {       /* more states than slots: the rest restore as UNKNOWN */
+        in->saved[free_slot].state = state;
+        in->saved[free_slot].phase = in->phase;
+    }
+}
+
+static enum phase phase_of_state(Instance *in, fmi2FMUstate state, int forget)
+{
+    int i;
+    for (i = 0; i < SAVED_STATES; i++)
+        if (state && in->saved[i].state == state) {
+            enum phase ph = in->saved[i].phase;
+            if (forget)
+                in->saved[i].state = NULL;
+            return ph;
+        }
+    return UNKNOWN;
+}
 
 /* The backend's logger calls, with fmi2Fatal logged as fmi2Error. pythonfmu passes the message
  * as the format and no arguments; it is forwarded the same way. */
@@ -467,11 +502,23 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 { CALL(fmi2SetString, c, vr, n, value); }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
-{ CALL(fmi2GetFMUstate, c, state); }
+{
+    fmi2Status s;
+    if (!p_fmi2GetFMUstate || !c || !state)
+        return fmi2Error;
+    s = mend(p_fmi2GetFMUstate(IN->backend, state));
+    if (s == fmi2OK || s == fmi2Warning)
+        remember_state(IN, *state);
+    return s;
+}
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
-{ CALL_TO(UNKNOWN, fmi2SetFMUstate, c, state); }
+{ CALL_TO(phase_of_state(IN, state, 0), fmi2SetFMUstate, c, state); }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state)
-{ CALL(fmi2FreeFMUstate, c, state); }
+{
+    if (c && state)
+        phase_of_state(IN, *state, 1);
+    CALL(fmi2FreeFMUstate, c, state);
+}
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size)
 { CALL(fmi2SerializedFMUstateSize, c, state, size); }
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[],
@@ -513,8 +560,10 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 { CALL(fmi2GetIntegerStatus, c, s, value); }
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    if (c && s == fmi2Terminated && value) {   /* the FMU never asks to end: a discarded step
-                                                  may be retried (see the top of this file) */
+    if (c && s == fmi2Terminated) {   /* the FMU never asks to end: a discarded step may be
+                                         retried (see the top of this file) */
+        if (!value)
+            return fmi2Error;
         *value = fmi2False;
         return fmi2OK;
     }
