@@ -39,6 +39,8 @@ class Result:
         self.snapshots = snapshots or []
         #: fidelity="auto": the chainmodel.fidelity_auto.AutoChoice that picked the level
         self.auto_choice = None
+        #: level 3: why its start was not the loaded statics (MultibodyModel.start_fallback)
+        self.start_fallback = None
 
     @property
     def static_tension(self) -> float:
@@ -205,8 +207,10 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     if batched and not snapshot_every and _run_batched(scene, model, stepper, times, data, bar):
         wall = _time.perf_counter() - wall
         bar.close()
-        return Result(scene, times, data, model.output_descriptions(), wall,
-                      dict(stepper.stats), model.static_tension, snaps)
+        result = Result(scene, times, data, model.output_descriptions(), wall,
+                        dict(stepper.stats), model.static_tension, snaps)
+        result.start_fallback = getattr(model, "start_fallback", None)
+        return result
     out = stepper.outputs()
     for i, t in enumerate(times):
         if i:
@@ -218,8 +222,10 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         bar.update(float(t))
     wall = _time.perf_counter() - wall
     bar.close()
-    return Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
-                  model.static_tension, snaps)
+    result = Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
+                    model.static_tension, snaps)
+    result.start_fallback = getattr(model, "start_fallback", None)
+    return result
 
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,

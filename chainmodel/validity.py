@@ -146,7 +146,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
           "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
           "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
-          "implausible_value": "a chain value far from its ISO 606 chain's"}
+          "implausible_value": "a chain value far from its ISO 606 chain's",
+          "start_unloaded": "level 3 started unloaded: no static equilibrium under the load"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -703,4 +704,6 @@ def result_problems(result) -> list[Problem]:
     sc = result.scene
     _, speed, _, load = sc.input_arrays(result.time)
     outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS + SPAN_OUTPUTS if n in result}
-    return problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load)
+    found = problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load)
+    note = getattr(result, "start_fallback", None)
+    return found + ([Problem("start_unloaded", note)] if note else [])

@@ -653,3 +653,15 @@ def test_a_refused_wrap_fit_says_the_slack_span_reads_low(tmp_path):
             text = " ".join(str(w) for w in r.warnings)
     assert means[1] < 0.5 * means[3]
     assert "was not honoured" in text and "slack span under load reads low" in text
+
+
+def test_a_start_that_could_not_be_loaded_is_said():
+    """xu2010 under 900 N m: level 3's statics find no equilibrium under that load (its slack
+    span near 0 N), so the chain starts unloaded and the load steps onto it; the result says so,
+    naming the load, instead of leaving its start-up shock to the breaking-load warning. Under
+    its 43.2 N m it starts loaded and nothing is said."""
+    r = chainmodel.simulate("xu2010", fidelity=3, load_torque=900.0, duration=0.02)
+    (found,) = [p for p in r.problems if p.code == "start_unloaded"]
+    assert "load.torque = 900 N.m" in found.message and "stepped onto it" in found.message
+    ok = chainmodel.simulate("xu2010", fidelity=3, duration=0.02)
+    assert "start_unloaded" not in codes(ok.problems)

@@ -153,6 +153,9 @@ _STATIC_CACHE: dict = {}
 class MultibodyModel(Model):
     """Level 3 (see module docstring)."""
 
+    #: why the last :meth:`initial_state` could not start in the loaded statics (None: it did)
+    start_fallback: str | None = None
+
     level = 3
     name = "multibody"
     second_order = True
@@ -294,6 +297,7 @@ class MultibodyModel(Model):
         from .multibody_statics import static_state
         load = float(u.torque)
         sol = None
+        self.start_fallback = None
         for m in ((load, 0.0) if load != 0.0 else (0.0,)):
             try:   # under the load, else (a chain the load drags over the teeth) without it
                 sol = (self.static_solution() if float(u.angle) == 0.0 and m == 0.0
@@ -301,8 +305,15 @@ class MultibodyModel(Model):
             except ValueError:
                 continue
             if sol is not None:
-                load = m
                 break
+        if sol is None or m != load:
+            self.start_fallback = (
+                f"level 3 found no static equilibrium under load.torque = {load:g} N.m at the "
+                f"start, so the chain started {'unloaded in its statics' if sol is not None else 'unloaded in the rigid layout'}"
+                f" and the load stepped onto it at t = 0: the first tens of milliseconds (and "
+                f"on a lightly damped drive longer) carry that start's ring, not the inputs' "
+                f"(a slack span near 0 N under the load; docs/multibody.md, \"Start\")")
+            load = m if sol is not None else load
         if sol is not None and not self.params["input_shaft.rigid"]:
             # the driver where the shaft spring carries the chain's torque on it:
             # k_r (angle - phi_1) + T_chain = 0, T_chain from the accelerations at rest
