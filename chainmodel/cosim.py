@@ -386,7 +386,8 @@ class CosimSession:
                                        + f" (The step itself failed: {what}.)") from exc
             raise
         self.prev_t, self.prev_speed = t, self.speed
-        self.turns_removed = round((self.angle - angle) / (2.0 * math.pi))
+        if angle != self.angle or self.turns_removed:
+            self.turns_removed = round((self.angle - angle) / (2.0 * math.pi))
         if not self.include_drive_inertia:
             u = st.inputs      # the held inputs at t + h
             row = self._without_drive_inertia(row, u.angle, u.speed, u.torque)

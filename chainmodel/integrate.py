@@ -144,7 +144,8 @@ class Stepper(ABC):
         if inputs is None:
             inputs = self.inputs
         if isinstance(inputs, Inputs):
-            # refused inputs first: the span roles' filter divides by the speed
+            # refused inputs first (the one check of this path): the span roles' filter
+            # divides by the speed
             self.refuse_bad_inputs(inputs.angle, inputs.speed, inputs.torque)
             saved = self._hold_role(t_end, inputs.speed, inputs.acceleration, inputs.torque)
             try:
@@ -170,7 +171,7 @@ class Stepper(ABC):
         One compiled call where the model and method have one; the same numbers as
         :meth:`advance` with ``Inputs(angle, speed, torque, acceleration)``."""
         t_end = self._check_time(t_end)
-        self.refuse_bad_inputs(angle, speed, torque)     # before the roles' filter, as above
+        self.refuse_bad_inputs(angle, speed, torque)     # the one check, before the roles' filter
         saved = self._hold_role(t_end, speed, acceleration, torque)
         try:
             row = self._advance_held(t_end, angle, speed, acceleration, torque)
@@ -283,8 +284,8 @@ class Stepper(ABC):
         model = self.model
         if model.n_states:
             return None
-        # stateless (level 0): the outputs of the held inputs at t_end
-        self.refuse_bad_inputs(angle, speed, torque)
+        # stateless (level 0): the outputs of the held inputs at t_end (inputs checked by the
+        # callers, advance and advance_held)
         a1 = angle + speed * (t_end - self.t)
         row = self._row
         if model.outputs_into(t_end, self.x, a1, speed, acceleration, torque, row) is not True:
@@ -471,8 +472,7 @@ class FixedStepper(Stepper):
             if self.model.n_states:
                 return None
             return super()._advance_held(t_end, angle, speed, acceleration, torque)
-        self.refuse_bad_inputs(angle, speed, torque)
-        t0 = self.t
+        t0 = self.t       # inputs checked by the callers, advance and advance_held
         a1 = angle + speed * (t_end - t0)
         if t_end <= t0:
             row = self._row
