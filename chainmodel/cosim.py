@@ -83,12 +83,12 @@ def stable_step(motor_inertia: float, params: Mapping, scheme: str = "jacobi") -
 NOTED_JUMP = 1e-3
 
 
-def angle_jump_tolerance(n_driver: int, speed_change: float, step: float) -> float:
+def angle_jump_tolerance(n_driver: int, hold_miss: float) -> float:
     """Largest difference [rad] between a new input_shaft.angle and where the held input
-    carried the old one (angle + speed x step) that a consistent master can produce: half a
-    driver tooth angle, pi / n_driver, plus |speed change| x step (the first-order hold's error
-    for a speed that moved monotonically within the step is at most that)."""
-    return math.pi / n_driver + abs(speed_change) * step
+    carried the old one (angle + speed x step) that is followed: half a driver tooth angle,
+    pi / n_driver, plus ``hold_miss``, |speed change| x step (what the first-order hold can miss
+    of a speed that moved monotonically within the step)."""
+    return math.pi / n_driver + hold_miss
 
 
 class CouplingUnstable(SimulationDiverged):
@@ -268,8 +268,7 @@ class CosimSession:
         held = st.inputs
         d = angle - held.angle
         hold = abs(self.speed - held.speed) * (st.t - self.prev_t)
-        tol = angle_jump_tolerance(self.drive.n_driver, self.speed - held.speed,
-                                   st.t - self.prev_t)
+        tol = angle_jump_tolerance(self.drive.n_driver, hold)
         turns = round(d / (2.0 * math.pi))
         if abs(d) > tol and turns != 0 and abs(d - 2.0 * math.pi * turns) <= tol:
             d -= 2.0 * math.pi * turns
@@ -278,7 +277,6 @@ class CosimSession:
             if abs(d) - hold > self.jump_noted[0]:
                 self.jump_noted = (abs(d) - hold, st.t)
             return angle
-        spring = (self.params["fidelity"] > 0 and not self.params["input_shaft.rigid"])
         raise ValueError(
             f"input input_shaft.angle = {angle:.9g} rad at t = {st.t:.9g} s is {d:+.6g} rad "
             f"from where the held input carried it ({held.angle:.9g} rad: the last angle "
@@ -286,9 +284,34 @@ class CosimSession:
             f"whose angle is the integral of its speed can produce ({tol:.3g} rad: half a "
             f"driver tooth plus the speed change times the step) and not a whole number of "
             "turns (a restart of the angle count, which is taken out): it would "
-            + ("wind the input-shaft spring" if spring else "move the driver")
+            + ("wind the input-shaft spring" if self._has_shaft_spring() else "move the driver")
             + " by that angle at once; set input_shaft.angle continuous and consistent with "
             "input_shaft.speed")
+
+    def _has_shaft_spring(self) -> bool:
+        return self.params["fidelity"] > 0 and not self.params["input_shaft.rigid"]
+
+    def restart_note(self, t: float) -> str | None:
+        """The sentence for a restart of the angle count in effect, else None."""
+        if not self.turns_removed:
+            return None
+        return (f"input_shaft.angle restarted its count by {self.turns_removed:+d} turn(s) "
+                f"at t = {t:.9g} s (whole turns from where its speed carried it): taken as a "
+                "restart, the drive's angles continue")
+
+    def jump_warning(self) -> str | None:
+        """The sentence for the largest accepted angle jump when it exceeds
+        :data:`NOTED_JUMP` beyond the hold's own miss, else None."""
+        jump, when = self.jump_noted
+        if not jump > NOTED_JUMP:
+            return None
+        what = (f"the input-shaft spring took it at once, "
+                f"{self.params['input_shaft.stiffness'] * jump:.3g} N.m"
+                if self._has_shaft_spring() else "the driver moved by it at once")
+        return (f"input_shaft.angle jumped by {jump:.3g} rad beyond what input_shaft.speed "
+                f"explains at t = {when:.9g} s (below the half driver tooth that is refused, so "
+                f"followed as imposed): {what}; set input_shaft.angle to the integral of "
+                "input_shaft.speed (docs/fmu.md, \"The angle input\")")
 
     def acceleration(self, t: float) -> float:
         """Backward difference of the speed input between communication points,

@@ -26,7 +26,8 @@ class Result:
 
     def __init__(self, scene: Scene, time: np.ndarray, data: dict[str, np.ndarray],
                  descriptions: dict[str, str], wall_time: float, stats: dict,
-                 static_tension, snapshots: list | None = None):
+                 static_tension, snapshots: list | None = None,
+                 start_fallback: str | None = None):
         self.scene = scene
         self.time = time
         self._data = data
@@ -39,8 +40,8 @@ class Result:
         self.snapshots = snapshots or []
         #: fidelity="auto": the chainmodel.fidelity_auto.AutoChoice that picked the level
         self.auto_choice = None
-        #: level 3: why its start was not the loaded statics (MultibodyModel.start_fallback)
-        self.start_fallback = None
+        #: why the run did not start where its level starts (Model.start_fallback)
+        self.start_fallback = start_fallback
 
     @property
     def static_tension(self) -> float:
@@ -207,10 +208,8 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
     if batched and not snapshot_every and _run_batched(scene, model, stepper, times, data, bar):
         wall = _time.perf_counter() - wall
         bar.close()
-        result = Result(scene, times, data, model.output_descriptions(), wall,
-                        dict(stepper.stats), model.static_tension, snaps)
-        result.start_fallback = getattr(model, "start_fallback", None)
-        return result
+        return Result(scene, times, data, model.output_descriptions(), wall,
+                      dict(stepper.stats), model.static_tension, snaps, model.start_fallback)
     out = stepper.outputs()
     for i, t in enumerate(times):
         if i:
@@ -222,10 +221,8 @@ def run_scene(scene: Scene, progress: bool = False, snapshot_every: int = 0,
         bar.update(float(t))
     wall = _time.perf_counter() - wall
     bar.close()
-    result = Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
-                    model.static_tension, snaps)
-    result.start_fallback = getattr(model, "start_fallback", None)
-    return result
+    return Result(scene, times, data, model.output_descriptions(), wall, dict(stepper.stats),
+                  model.static_tension, snaps, model.start_fallback)
 
 
 def simulate(scene: "str | Path | Scene" = "xu2010", *, parameters: Mapping[str, Any] | None = None,

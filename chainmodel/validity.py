@@ -89,7 +89,8 @@ from .loss_balance import LossBalance
 from .models.limits import drive_string_frequency
 
 __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load",
-           "output_problems", "problems", "result_problems", "Monitor", "REVERSAL_SPEED"]
+           "output_problems", "problems", "result_problems", "start_problems", "Monitor",
+           "REVERSAL_SPEED"]
 
 #: a driven speed against the input's direction by more than this [rad/s] is a reversal
 REVERSAL_SPEED = 1e-3
@@ -705,5 +706,10 @@ def result_problems(result) -> list[Problem]:
     _, speed, _, load = sc.input_arrays(result.time)
     outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS + SPAN_OUTPUTS if n in result}
     found = problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load)
-    note = getattr(result, "start_fallback", None)
-    return found + ([Problem("start_unloaded", note)] if note else [])
+    return found + start_problems(result.start_fallback)
+
+
+def start_problems(fallback: str | None) -> list[Problem]:
+    """The run's start where the model could not start where it should (``Model.start_fallback``:
+    level 3 without a loaded static equilibrium)."""
+    return [Problem("start_unloaded", fallback)] if fallback else []

@@ -432,12 +432,10 @@ class ChainDrive(Fmi2Slave):
         self._store_row(row)
         self._stale = False
         self._initialized = True
-        found = self._validity.geometry_problems(st.model.drive, self._model_params,
-                                                 st.model.level)
-        start = getattr(getattr(st.model, "inner", st.model), "start_fallback", None)
-        if start:   # level 3 could not start in its loaded statics
-            found = found + [self._validity.Problem("start_unloaded", start)]
-        self._check_validity(st.t, row, u.speed, u.torque, found)
+        self._check_validity(st.t, row, u.speed, u.torque,
+                             self._validity.geometry_problems(st.model.drive, self._model_params,
+                                                              st.model.level)
+                             + self._validity.start_problems(st.model.start_fallback))
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
               if d.startswith(self._M.base.QUASI_STATIC)]
@@ -493,26 +491,16 @@ class ChainDrive(Fmi2Slave):
             return False
         values = self._store_row(row)
         self._stale = False
-        if session.turns_removed and not self._told_turns:
-            self._told_turns = True
-            self.log(_fmi_text(
-                f"input_shaft.angle restarted its count by {session.turns_removed:+d} turn(s) "
-                f"at t = {current_time:.9g} s (whole turns from where its speed carried it): "
-                "taken as a restart, the drive's angles continue (logged once)"),
-                Fmi2Status.ok, "logAll")
-        jump, when = session.jump_noted
-        if jump > self._cosim.NOTED_JUMP and not self._told_jump:
-            self._told_jump = True
-            p = self._model_params
-            spring = p["fidelity"] > 0 and not p["input_shaft.rigid"]
-            self.log(_fmi_text(
-                f"input_shaft.angle jumped by {jump:.3g} rad beyond what input_shaft.speed "
-                f"explains at t = {when:.9g} s (below the half driver tooth that is refused, "
-                "so followed as imposed): "
-                + (f"the input-shaft spring took it at once, {p['input_shaft.stiffness'] * jump:.3g}"
-                   " N.m" if spring else "the driver moved by it at once")
-                + "; set input_shaft.angle to the integral of input_shaft.speed (docs/fmu.md, "
-                "\"The angle input\"; logged once)"), Fmi2Status.warning)
+        if not self._told_turns:     # each logged once
+            note = session.restart_note(current_time)
+            if note:
+                self._told_turns = True
+                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.ok, "logAll")
+        if not self._told_jump:
+            note = session.jump_warning()
+            if note:
+                self._told_jump = True
+                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.warning)
         if session.torque_causal:   # the validity checks' input speed: the motor rotor's
             speed = session.motor_values()[1]
         self._check_validity(current_time + step_size, values, speed, session.torque)

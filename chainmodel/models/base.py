@@ -141,6 +141,9 @@ class Model(ABC):
     #: False where ``solver.tolerance`` does not set the automatic step (level 3: its step is
     #: the stability bound; docs/numerics.md)
     tolerance_applies: ClassVar[bool] = True
+    #: why the last :meth:`initial_state` could not start where the level starts its runs
+    #: (level 3: its loaded statics), None where it did (validity.start_problems reports it)
+    start_fallback: str | None = None
 
     def __init__(self, drive: Drive, params: Mapping[str, Any]):
         if drive.links is None:

@@ -153,9 +153,6 @@ _STATIC_CACHE: dict = {}
 class MultibodyModel(Model):
     """Level 3 (see module docstring)."""
 
-    #: why the last :meth:`initial_state` could not start in the loaded statics (None: it did)
-    start_fallback: str | None = None
-
     level = 3
     name = "multibody"
     second_order = True

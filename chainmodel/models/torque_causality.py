@@ -73,6 +73,10 @@ class TorqueCausalModel(Model):
     """A level 1-3 model with the motor rotor at the far end of its input-shaft spring (module
     docstring). Everything the drive computes comes from the wrapped model ``inner``."""
 
+    @property
+    def start_fallback(self) -> str | None:
+        return self.inner.start_fallback
+
     def __init__(self, inner: Model):
         super().__init__(inner.drive, inner.params)
         if inner.n_states == 0:
