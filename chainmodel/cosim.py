@@ -228,6 +228,7 @@ class CosimSession:
         #: below the refusal's tolerance is followed as imposed; the FMU warns of one above
         #: :data:`NOTED_JUMP`
         self.jump_noted = (0.0, 0.0)
+        self._torque_inputs = False
 
     # --- inputs --------------------------------------------------------------------------------
     def set_inputs(self, angle: float, speed: float, torque: float,
@@ -260,14 +261,14 @@ class CosimSession:
         difference beyond that tolerance raises ValueError naming the input (a jump of the
         angle its speed does not explain would wind the input-shaft spring by it)."""
         st, angle = self.stepper, self.angle
-        if (st is None or self.prev_t is None or self.torque_causal or not math.isfinite(angle)
+        if (st is None or self.prev_t is None or self._torque_inputs or not math.isfinite(angle)
                 or not math.isfinite(self.speed)):
             # before the run's first step the angle is where the master starts it (it may set
             # it again in initialization mode); non-finite inputs are refused by the step
             return angle
-        held = st.inputs
-        d = angle - held.angle
-        hold = abs(self.speed - held.speed) * (st.t - self.prev_t)
+        held_angle, held_speed = st.held_angle_speed()
+        d = angle - held_angle
+        hold = abs(self.speed - held_speed) * (st.t - self.prev_t)
         tol = angle_jump_tolerance(self.drive.n_driver, hold)
         turns = round(d / (2.0 * math.pi))
         if abs(d) > tol and turns != 0 and abs(d - 2.0 * math.pi * turns) <= tol:
@@ -279,8 +280,8 @@ class CosimSession:
             return angle
         raise ValueError(
             f"input input_shaft.angle = {angle:.9g} rad at t = {st.t:.9g} s is {d:+.6g} rad "
-            f"from where the held input carried it ({held.angle:.9g} rad: the last angle "
-            f"advanced at input_shaft.speed = {held.speed:.6g} rad/s), more than a master "
+            f"from where the held input carried it ({held_angle:.9g} rad: the last angle "
+            f"advanced at input_shaft.speed = {held_speed:.6g} rad/s), more than a master "
             f"whose angle is the integral of its speed can produce ({tol:.3g} rad: half a "
             f"driver tooth plus the speed change times the step) and not a whole number of "
             "turns (a restart of the angle count, which is taken out): it would "
@@ -352,6 +353,7 @@ class CosimSession:
         else:
             self.watch.reset()
         self.stepper, self.params, self.drive = stepper, params, drive
+        self._torque_inputs = params["input_shaft.causality"] == "torque"   # (torque_causal)
         return Built(stepper, params, drive, level)
 
     @property

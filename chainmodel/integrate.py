@@ -129,6 +129,14 @@ class Stepper(ABC):
     def inputs(self, u: Inputs) -> None:
         self._inputs = u
 
+    def held_angle_speed(self) -> tuple[float, float]:
+        """(angle, speed) of :attr:`inputs` without building an Inputs (the FMU's per-step
+        angle check)."""
+        u = self._inputs
+        if u is None:
+            return self._held[0], self._held[1]
+        return u.angle, u.speed
+
     def _set_held(self, angle, speed, torque, acceleration) -> None:
         self._inputs = None
         self._held = (angle, speed, torque, acceleration)
