@@ -148,6 +148,7 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
           "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
           "implausible_value": "a chain value far from its ISO 606 chain's",
+          "hanging_spans": "spans hanging along their length at level 1 or 2",
           "start_unloaded": "level 3 started unloaded: no static equilibrium under the load"}
 
 
@@ -187,6 +188,7 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
         length = [_level3_start(drive, params, length[0])]
     # the option is levels 0-2's: level 3 holds its own statics and says nothing of it
     wrap = [] if level == 3 else _wrap_statics_problems(drive, params, level)
+    wrap += _hanging_problems(drive, params, level)
     if length and wrap and wrap[0].code == "wrap_statics_unavailable":
         # the length is the cause: one warning, which says what it also costs (the wrap fit)
         return odd + [Problem(length[0].code,
@@ -250,8 +252,46 @@ def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
         f"no wrap to fit ({why}), so levels 0-2 hold their span ends with the seat ladder "
         f"(torsional.seat_compliance) and the catenary instead; where the chain hangs on its "
         f"sag their slack span under load reads low (nothing holds it up but a sag the "
-        f"parabola may not cover); run level 3 where the torsional mode or the slack span "
-        f"matters (docs/reduced_models.md, \"Where the fit is refused\")"))]
+        f"parabola may not cover), and on spans hanging along their length levels 1-2's read "
+        f"high instead; run level 3 where the torsional mode or the slack span matters "
+        f"(docs/reduced_models.md, \"Where the fit is refused\")"))]
+
+
+#: levels 1-2 warn where the weight along the spans (span_sag.hanging_tension) is at least
+#: this share of the static tension and their span ends are not fitted to level 3's wrap
+HANGING_SHARE = 0.25
+
+
+def _hanging_problems(drive: Drive, params: Mapping[str, Any],
+                      level: int | None) -> list[Problem]:
+    """Levels 1-2 on spans hanging along their length (a near-vertical drive): their span law
+    is elastic from the seat ladder's ends, so the polygon's length changes stretch its links,
+    where level 3's chain takes them up in the lower sprocket's hanging wrap at about the
+    weight's tension (docs/reduced_models.md, "Spans hanging along their length"). Only where
+    the wrap fit is not honoured: on its ends (a drive inclined up to 85 degrees) levels 1-2
+    follow level 3."""
+    from .models.span_sag import hanging_tension
+    from .models.wrap_statics import honoured, span_ends, weighted_static_tension
+    if level not in (1, 2) or drive.links is None:
+        return []
+    hang = hanging_tension(drive, params)
+    if not hang > 0.0:
+        return []
+    span_ends(drive, params)        # the fit or its refusal recorded, as the level's build does
+    if honoured(drive, params):
+        return []
+    static = weighted_static_tension(drive, params)
+    if hang < HANGING_SHARE * static:
+        return []
+    return [Problem("hanging_spans", (
+        f"the spans hang along their length (the weight along them alone holds {hang:.3g} N "
+        f"of the {static:.3g} N static tension): level {level}'s span law stretches the "
+        f"chain's links where level 3's chain takes the polygon's length changes up in the "
+        f"lower sprocket's hanging wrap, so its running span tensions read high (a vertical "
+        f"16B 21/21 drive with no pretension at 5-100 rpm: levels 1 and 2 at 4-10 x level 3's "
+        f"span tensions; under load level 1's tight span +18-20 %, level 2's within 2 %). Take "
+        f"span tensions from level 0 (within 15 % there) or level 3, or add pretension "
+        f"(docs/reduced_models.md, \"Spans hanging along their length\")"))]
 
 
 def _length_problems(drive: Drive, params: Mapping[str, Any]) -> list[Problem]:

@@ -200,3 +200,83 @@ def test_the_fits_floored_law_is_the_cubics_root(s):
             roots = np.roots([1.0, -raw, -a * a, -s])
             exact = max(r.real for r in roots if abs(r.imag) <= 1e-7 * abs(r))
             assert _floored(raw, a, s) == pytest.approx(exact, rel=1e-10), (raw, a)
+
+
+# --- spans hanging along their length (a near-vertical drive) ---------------------------------
+
+#: a vertical 16B 21/21 drive, 60 links where they wrap tightly, no pretension: its spans rise
+#: straight up, so their normal weight (the parabola's sag term) vanishes and the weight along
+#: them holds the chain (docs/reduced_models.md, "Spans hanging along their length")
+VERTICAL = dict(chain="16B", drive_pitch=0.0254, drive_driver_teeth=21, drive_driven_teeth=21,
+                drive_links=60, drive_centre_distance=0.0, drive_inclination=math.pi / 2,
+                chain_pretension=0.0, static_tension=None)
+
+
+def _weight_per_metre(p, d):
+    return p["gravity"] * p["chain.link_mass"] / d.pitch
+
+
+@pytest.mark.parametrize("degrees", [90.0, 60.0, 30.0])
+def test_the_hanging_tension_is_half_the_weight_of_a_span_rising(degrees):
+    """Equal sprockets: both spans run parallel to the line of centres, between tangent
+    points a centre distance C apart, so each rises C sin(inclination) and its links' mean
+    tension is at least half its weight along it, w C sin / 2 (a hanging chain's tension
+    rises by w per metre climbed; its lower end cannot push). The tooth-period-mean chord
+    the model takes is within 1 % of C here."""
+    sc = load_scene("xu2010", fidelity=0, **dict(VERTICAL,
+                                                 drive_inclination=math.radians(degrees)))
+    d, p = sc.drive, sc.parameters
+    expected = 0.5 * _weight_per_metre(p, d) * d.centre_distance * math.sin(math.radians(degrees))
+    assert SG.hanging_tension(d, p) == pytest.approx(expected, rel=0.01)
+    assert SG.hanging_tension(d, dict(p, gravity=0.0)) == 0.0
+
+
+def test_a_vertical_drive_carries_its_hanging_weight_at_every_level():
+    """Item 4 on a vertical drive: levels 0-2 said 0 N (no normal weight, no sag term) where
+    level 3's statics carry 11 N. Level 3 is at least the weight's floor (its middle links
+    hold half of each span's weight above a lower end that cannot push), and levels 0-2 agree
+    with it within 5 %."""
+    ts = [load_scene("xu2010", fidelity=level, **VERTICAL).model().static_tension()
+          for level in range(4)]
+    sc = load_scene("xu2010", fidelity=0, **VERTICAL)
+    floor = 0.5 * _weight_per_metre(sc.parameters, sc.drive) * sc.drive.centre_distance
+    assert ts[3] >= floor
+    assert ts[:3] == pytest.approx([ts[3]] * 3, rel=0.05)
+
+
+def test_no_span_goes_below_the_weight_along_it_under_load():
+    """Under a load the slack span of a vertical drive still hangs from its upper end: no
+    level's slack span drops below the weight's floor (level 0 gave 0.01 N against level 3's
+    12 N), and level 0's spans keep the driven sprocket's torque balance, tight - slack =
+    (load + driven damping x speed) / pitch radius, on top of it."""
+    load = 20.0
+    kw = dict(VERTICAL, input_speed_rpm=30.0, load_torque=load, duration=0.6,
+              ramp_time=0.1, output_interval=1e-3)
+    sc = load_scene("xu2010", fidelity=0, **VERTICAL)
+    floor = SG.hanging_tension(sc.drive, sc.parameters)
+    for level in (0, 1, 2):
+        r = chainmodel.simulate("xu2010", fidelity=level, **kw)
+        m = r.time >= 0.3
+        slack = r["slack_span.tension"][m]
+        assert slack.min() >= floor * (1.0 - 1e-9), level
+        if level == 0:
+            # less the centrifugal tension both spans carry alike
+            p = r.scene.parameters
+            arm = r.scene.drive.driven.pitch_radius
+            balance = (load + p["driven.damping"] * r["driven.speed"][m]) / arm
+            diff = r["tight_span.tension"][m] - slack
+            assert np.median(diff / balance) == pytest.approx(1.0, rel=0.03)
+
+
+def test_levels_1_2_on_hanging_spans_are_warned():
+    """Levels 1-2 on spans hanging along their length read high (their law stretches the links
+    where level 3's hanging wrap takes the polygon up): warned at levels 1-2, not at level 0
+    nor on the same drive laid horizontal."""
+    kw = dict(VERTICAL, input_speed_rpm=5.0, duration=0.01, ramp_time=0.005)
+    codes = {level: [p.code for p in chainmodel.simulate("xu2010", fidelity=level,
+                                                         **kw).problems]
+             for level in (0, 1, 2)}
+    assert "hanging_spans" not in codes[0]
+    assert "hanging_spans" in codes[1] and "hanging_spans" in codes[2]
+    flat = chainmodel.simulate("xu2010", fidelity=1, **dict(kw, drive_inclination=0.0))
+    assert "hanging_spans" not in [p.code for p in flat.problems]

@@ -50,7 +50,10 @@ C_I1, C_I2, C_D2, C_SUM, C_RHO_G, C_RATIO, C_CENTRIFUGAL, C_FLOOR = range(8)
 C_KS_UP, C_KS_LOW = 8, 9
 #: the span roles' hold (span_roles.lower_tight): +1 upper tight, -1 lower, 0 from the inputs
 C_ROLE = 10
-C_SIZE = 11
+#: the least mean tension a span carries under the weight along it [N] (span_sag.
+#: hanging_tension; 0: none)
+C_HANG = 11
+C_SIZE = 12
 
 _EVENT_TOL = 1e-12   # chainmodel.kinematics.fourbar._EVENT_TOL
 
@@ -138,7 +141,21 @@ def driven_rotation(phi, w, a, reverse, K):
 
 
 @jit
-def split(total, floor, arm_pull, arm_back, load, ks_pull=0.0, ks_back=0.0):
+def split(total, floor, arm_pull, arm_back, load, ks_pull=0.0, ks_back=0.0, hang=0.0):
+    """:func:`_split`, neither span below ``hang`` [N], the least mean tension a span carries
+    under the weight along it (span_sag.hanging_tension): a span whose law would leave it
+    below hangs from its upper end, its lower end looping off the sprocket, and the other
+    span carries the torque balance on top of it."""
+    t_pull, t_back = _split(total, floor, arm_pull, arm_back, load, ks_pull, ks_back)
+    if t_back < hang:
+        return (load + hang * arm_back) / arm_pull, hang
+    if t_pull < hang:
+        return hang, (hang * arm_pull - load) / arm_back
+    return t_pull, t_back
+
+
+@jit
+def _split(total, floor, arm_pull, arm_back, load, ks_pull=0.0, ks_back=0.0):
     """Quasi-static span tensions (T_pull, T_back) of a rigid chain: T_pull a_pull - T_back
     a_back = load, the spans' linear (raw) tensions summing to ``total``.
 
@@ -198,11 +215,11 @@ def _floored_root(total, floor, ratio, offset, ks_s=0.0, ks_q=0.0):
 
 @jit
 def split_many(total, floor, arm_pull, arm_back, load, t_pull, t_back, ks_pull=0.0,
-               ks_back=0.0):
+               ks_back=0.0, hang=0.0):
     """:func:`split` over arrays, into ``t_pull`` and ``t_back``."""
     for i in range(load.shape[0]):
         t_pull[i], t_back[i] = split(total, floor, arm_pull[i], arm_back[i], load[i], ks_pull,
-                                     ks_back)
+                                     ks_back, hang)
 
 
 @jit
@@ -221,7 +238,7 @@ def level0_outputs(angle, speed, acc, torque, K, G, C, out):
     low_end = g[11]
     load = C[C_I2] * a2 + C[C_D2] * w2 + torque
     t_up, t_low = split(C[C_SUM], C[C_FLOOR], up_start, low_end, load, C[C_KS_UP],
-                        C[C_KS_LOW])
+                        C[C_KS_LOW], C[C_HANG])
     tau_in = C[C_I1] * acc + t_up * up_end - t_low * low_start
     if not lower_tight(torque, C[C_D2], C[C_I2], C[C_RATIO], speed, acc, C[C_ROLE]):
         tight = t_up

@@ -231,7 +231,10 @@ P_ROLE = 41
 #: steps than an oscillation of its rate (RK4 is stable on it to h lambda = 2.785, and the
 #: state only follows its target); at the default tolerance (h w = 0.507) h lambda <= 2
 LAG_SHARE = 0.25
-P_SIZE = 42
+#: the least mean tension a span carries under the weight along it [N] (span_sag.
+#: hanging_tension; 0: none): neither span's law goes below it
+P_HANG = 42
+P_SIZE = 43
 
 # --- auxiliary outputs of the kernel ----------------------------------------------------------
 (A_T_UP, A_T_LOW, A_TAU_IN, A_ACC1, A_ACC2, A_L_UP, A_L_LOW, A_G_UP, A_G_LOW, A_EV_US, A_EV_UE,
@@ -590,6 +593,13 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
         aux[A_LAG_UP] = 0.0
         aux[A_LAG_LOW] = 0.0
         aux[A_LAG_W] = 0.0
+    # a span whose law would leave it below the weight along it hangs from its upper end, its
+    # lower end looping off the sprocket (span_sag.hanging_tension)
+    hang = P[P_HANG]
+    if t_u < hang:
+        t_u = hang
+    if t_l < hang:
+        t_l = hang
     # --- sprockets: seed 004 eq 50 (driven), shaft spring of seed 003 eq 14 (driver)
     q2 = t_u * aus - t_l * ale - P[P_D2] * w2 - load
     j11 = P[P_J11]

@@ -51,18 +51,19 @@ __all__ = ["KinematicModel", "static_span_tension", "split_tensions", "seat_stif
 
 
 def split_tensions(sum_tension, arm_pull, arm_back, torque, floor=0.0, ks_pull=0.0,
-                   ks_back=0.0):
+                   ks_back=0.0, hang=0.0):
     """Tensions (T_pull, T_back) with T_pull a_pull - T_back a_back = torque and the raw
     tensions summing to ``sum_tension``; without a ``floor`` or sag the tensions are the raw
-    ones, neither negative; with them each is the floored, sagging law of levels 1-2
-    (vectorised :func:`chainmodel.kernels.kinematic.split`)."""
+    ones, neither negative; with them each is the floored, sagging law of levels 1-2; neither
+    below ``hang``, the weight along the spans' floor (vectorised
+    :func:`chainmodel.kernels.kinematic.split`)."""
     from ..kernels.kinematic import split_many
     arm_pull, arm_back, torque = np.broadcast_arrays(
         *(np.ascontiguousarray(v, dtype=float) for v in (arm_pull, arm_back, torque)))
     shape = torque.shape
     t_pull, t_back = np.empty(torque.size), np.empty(torque.size)
     split_many(float(sum_tension), float(floor), arm_pull.ravel(), arm_back.ravel(),
-               torque.ravel(), t_pull, t_back, float(ks_pull), float(ks_back))
+               torque.ravel(), t_pull, t_back, float(ks_pull), float(ks_back), float(hang))
     return t_pull.reshape(shape), t_back.reshape(shape)
 
 
@@ -157,6 +158,13 @@ class KinematicModel(Model):
         return 0.0 if self.drive.links is None else float(span_ends(self.drive, self.params)[2])
 
     @cached_property
+    def _hang(self) -> float:
+        """The least mean tension a span carries under the weight along it [N]
+        (:func:`~chainmodel.models.span_sag.hanging_tension`): neither span goes below it."""
+        from .span_sag import hanging_tension
+        return hanging_tension(self.drive, self.params)
+
+    @cached_property
     def _sag_ks(self) -> tuple[float, float]:
         """(upper, lower) span's sag term times its stiffness, k_eff S [N^3]
         (:func:`~chainmodel.models.wrap_statics.straight_span_sags`, ``torsional.sag_lag``):
@@ -220,7 +228,8 @@ class KinematicModel(Model):
             load = (p["driven.inertia"] * rot.driven_acceleration
                     + p["driven.damping"] * rot.driven_speed + torque[sel])
             t_up, t_low = split_tensions(self._raw_sum, g.upper.arm_start,
-                                         g.lower.arm_end, load, self._floor, *self._sag_ks)
+                                         g.lower.arm_end, load, self._floor, *self._sag_ks,
+                                         self._hang)
             tau_in = (p["driver.inertia"] * acceleration[sel] + t_up * g.upper.arm_end
                       - t_low * g.lower.arm_start)
             # span roles by power flow, from the inputs (chainmodel.kernels.span_roles)
@@ -257,6 +266,7 @@ class KinematicModel(Model):
         C[KK.C_SUM], C[KK.C_FLOOR] = self._raw_sum, self._floor
         C[KK.C_KS_UP], C[KK.C_KS_LOW] = self._sag_ks
         C[KK.C_ROLE] = 0.0         # span roles from the inputs (hold_role)
+        C[KK.C_HANG] = self._hang
         C[KK.C_RHO_G] = p["chain.link_mass"] / d.pitch * (p["gravity"]
                                                           * math.cos(p["drive.inclination"]))
         C[KK.C_RATIO] = d.tooth_ratio

@@ -32,7 +32,8 @@ import numpy as np
 from ..geometry import Drive
 from ..kinematics.wrapping import tooth_period_geometry
 
-__all__ = ["sag_term", "span_terms", "tension", "normal_weights", "deep", "SHALLOW"]
+__all__ = ["sag_term", "span_terms", "tension", "normal_weights", "along_weights",
+           "hanging_tension", "deep", "SHALLOW"]
 
 #: the largest sag-to-chord ratio w_n L / (8 T) for which the shallow parabola is the span's
 #: shape (Irvine 1981, ch. 2: a flat-sag cable to about 1:8; here held to 1:10)
@@ -43,14 +44,39 @@ def normal_weights(drive: Drive, params: Mapping[str, Any]) -> tuple[tuple[float
     """((w_n [N/m], L [m]) of the upper span, the same of the lower): the weight per metre
     normal to each span's tooth-period-mean chord, and its mean length. The line of centres is
     inclined by ``drive.inclination`` above the horizontal (the modal model's P_GN)."""
+    return _weights(drive, params, 1j)
+
+
+def along_weights(drive: Drive, params: Mapping[str, Any]) -> tuple[tuple[float, float], ...]:
+    """((w_t [N/m], L [m]) of the upper span, the same of the lower): as
+    :func:`normal_weights`, the weight per metre along each span's chord."""
+    return _weights(drive, params, 1.0)
+
+
+def _weights(drive, params, turn):
     g = tooth_period_geometry(drive, 100)
     w = params["gravity"] * params["chain.link_mass"] / drive.pitch
     up = 1j * np.exp(1j * (drive.centre_angle - params["drive.inclination"]))
     out = []
     for span in (g.upper, g.lower):
-        normal = 1j * np.exp(1j * float(np.mean(span.direction)))
-        out.append((abs(w * float((np.conj(normal) * up).real)), float(np.mean(span.length))))
+        axis = turn * np.exp(1j * float(np.mean(span.direction)))
+        out.append((abs(w * float((np.conj(axis) * up).real)), float(np.mean(span.length))))
     return tuple(out)
+
+
+def hanging_tension(drive: Drive, params: Mapping[str, Any]) -> float:
+    """The least mean tension [N] a span carries at rest under the weight along it, the larger
+    of the two spans' w_t L / 2: a hanging chain's tension rises along it by the weight per
+    metre times the height climbed (Irvine, *Cable Structures*, 1981, ch. 1: T = H + w y on
+    the catenary), and its lower end cannot push, so a span rising h = L w_t / w carries at
+    least w h / 2 on the mean over its links, whatever the chain's length asks. What the
+    lower end carries (the lower sprocket's hanging wrap, the chain's fit) comes on top: level
+    3's statics hold it (wrap_statics._hanging). 0 without weight or a link count; it matters
+    where the spans rise steeply (a near-vertical drive, whose spans' normal weight, and with
+    it :func:`sag_term`, vanishes)."""
+    if drive.links is None or params["gravity"] == 0.0:
+        return 0.0
+    return max(0.5 * wt * length for wt, length in along_weights(drive, params))
 
 
 def sag_term(drive: Drive, params: Mapping[str, Any], modes: int | None = None) -> float:
@@ -90,5 +116,8 @@ def tension(raw: float, s_over_d: float) -> float:
 
 def deep(drive: Drive, params: Mapping[str, Any], t: float) -> bool:
     """True where a span at tension t [N] sags by more than ``SHALLOW`` of its chord (or t is
-    0 under weight): no shallow parabola, so no :func:`tension`."""
-    return any(wn * length > 8.0 * SHALLOW * t for wn, length in normal_weights(drive, params))
+    0 under weight): no shallow parabola, so no :func:`tension`. A span with no weight normal
+    to it (rounding's, on a vertical drive) does not sag."""
+    w = abs(params["gravity"]) * params["chain.link_mass"] / drive.pitch
+    return any(wn > 1e-9 * w and wn * length > 8.0 * SHALLOW * t
+               for wn, length in normal_weights(drive, params))

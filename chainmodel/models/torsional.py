@@ -53,6 +53,7 @@ from . import limits
 from .chain_inertia import reference_geometry, sprocket_mass_matrix, two_inertia_stiffness
 from .base import (ALL_OUTPUTS, QUASI_STATIC, Inputs, Model, SimulationDiverged,
                    centrifugal_tension)
+from .span_sag import hanging_tension
 from .static_tension import seat_series_compliance, seat_stiffness
 from .wrap_statics import (held_span_tension, honoured, span_ends, span_sag_terms,
                            straight_span_sags,
@@ -189,6 +190,7 @@ class TorsionalModel(Model):
             P[S.P_LAG] = 1.0
             P[S.P_LAG_RATE] = S.LAG_RATE
             P[S.P_LBAR_U], P[S.P_LBAR_L] = self.reference["l_up"], self.reference["l_low"]
+        P[S.P_HANG] = hanging_tension(d, p)
         self._write_span_ends(P, self._span_ends)
         return P
 

@@ -372,6 +372,8 @@ def slack_shortfall(drive: Drive, params: Mapping[str, Any], level: int | None) 
     spans = _mean_links(drive) + (params["chain.link_stiffness"],
                                   straight_span_sags(drive, params))
     held = _split_slack(fit.held_tension, 0.0, fit.compliance, spans, fit.split_difference)
+    # the kernels' floor under either span: the weight along it (span_sag.hanging_tension)
+    held = max(held, SG.hanging_tension(drive, params))
     if held >= (1.0 - SHORTFALL) * fit.loaded_slack:
         return None
     m_b = fit.split_difference * drive.driven.pitch_radius
@@ -524,10 +526,41 @@ def weighted(drive: Drive, params: Mapping[str, Any], *,
     and a pretensioned drive (mu < MU_LOW) never asks for level 3's statics. ``exact=False``
     skips that (the parabola's S throughout: within 7 % where they differ, docs/reduced_models.md).
 
+    The spans' weight along them sets a floor under it (:func:`_hanging`): a steeply rising
+    span hangs from its upper end, whatever the ladder's compatibility asks.
+
     Returns (T [N], S_eff [N^2 m]); S_eff 0 where there is no weight or the sag is too deep for
     the parabola (then T is level 3's statics or the ladder's)."""
     if drive.links is None:
         return params["chain.pretension"], 0.0
+    t, s_eff, deep = _sagging(drive, params, exact)
+    # a chain sagging deeper than the parabola (far too long: geometry_problems says so) hangs
+    # in its sag, whose tension level 3's statics give where they converge
+    if not deep and t < SAG_RATIO * SG.hanging_tension(drive, params):
+        t = max(t, _hanging(drive, params, exact))
+    return t, s_eff
+
+
+def _hanging(drive: Drive, params: Mapping[str, Any], exact: bool) -> float:
+    """The static tension [N] a chain with no pretension carries on spans hanging along their
+    length (a near-vertical drive): level 3's statics at no pretension where they find an
+    equilibrium within ``SAG_RATIO`` of the weight's own floor
+    (:func:`~chainmodel.models.span_sag.hanging_tension`, which leaves out the lower
+    sprocket's hanging wrap), else that floor. A floor under :func:`weighted`'s tension, not
+    a term of its cubic: a span taut along its whole length (pretension above it) takes the
+    ladder's tension; one that is not hangs and its lower end loops, its mean held by the
+    weight (no equilibrium of the ladder's stretch)."""
+    floor = SG.hanging_tension(drive, params)
+    if not exact:
+        return floor
+    t3 = sag_tension(drive, dict(params, **{"chain.pretension": 0.0}))
+    return t3 if t3 is not None and floor <= t3 <= SAG_RATIO * floor else floor
+
+
+def _sagging(drive: Drive, params: Mapping[str, Any],
+             exact: bool) -> tuple[float, float, bool]:
+    """:func:`weighted` without the hanging floor: the cubic on the parabola's or level 3's
+    sag term; and whether the spans sag deeper than the parabola holds."""
     x, d = ST.static_numerator(drive, params)
     raw = x / d
     s = SG.sag_term(drive, params)
@@ -536,18 +569,18 @@ def weighted(drive: Drive, params: Mapping[str, Any], *,
         # no shallow parabola: level 3's statics where they find an equilibrium (a chain this
         # long takes no pretension: pretension_error), else the ladder's 0 N
         t3 = sag_tension(drive, params) if exact else None
-        return (max(raw, 0.0) if t3 is None else t3), 0.0
+        return (max(raw, 0.0) if t3 is None else t3), 0.0, True
     if s <= 0.0 or not exact:
-        return t, s
+        return t, s, False
     mu = 1.0 - raw / t
     if mu <= MU_LOW:
-        return t, s
+        return t, s, False
     s3 = _calibrated_sag_term(drive, params)
     if s3 is None:
-        return t, s
+        return t, s, False
     u = min(1.0, (mu - MU_LOW) / (MU_HIGH - MU_LOW))
     s_eff = s + (s3 - s) * u * u * (3.0 - 2.0 * u)
-    return SG.tension(raw, s_eff / d), s_eff
+    return SG.tension(raw, s_eff / d), s_eff, False
 
 
 def _calibrated_sag_term(drive: Drive, params: Mapping[str, Any]) -> float | None:
