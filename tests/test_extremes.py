@@ -513,3 +513,18 @@ def test_stepper_refuses_a_speed_beyond_the_level():
     st = make_stepper(sc.model(), "rk4")
     with pytest.raises(ValueError, match=r"input_shaft\.speed.*limit"):
         st.advance(1e-3, Inputs(0.0, 10000 * RPM, 0.0))
+
+
+def test_a_driver_turning_back_says_why_the_tooth_ratio_is_not_defined():
+    """A soft input shaft (100 N m/rad) at 5 rpm lets the driver sprocket ring back within the
+    steady window: the tooth ratio over whole driver tooth periods is then not defined, and the
+    summary says why, with the driver's speed range (it was "n/a" with no reason: an audit)."""
+    r = chainmodel.simulate("xu2010", fidelity=1, input_speed_rpm=5, duration=2.0,
+                            input_shaft_stiffness=100.0, input_shaft_damping=0.0,
+                            ramp_time=0.0)
+    s = r.summary()
+    w1 = r["driver.speed"][r.time >= s["steady_from_s"]]
+    assert w1.min() < 0.0 < w1.max()                 # the premise: the driver turns back
+    assert math.isnan(s["tooth_ratio"])
+    text = [w for w in s["warnings"] if w.startswith("the driver sprocket turns back")]
+    assert len(text) == 1 and "tooth ratio" in text[0] and f"{w1.min():.4g}" in text[0]

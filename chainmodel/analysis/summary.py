@@ -129,6 +129,16 @@ def summarise(result) -> dict:
                         f"driver tooth period ({need:.3g} s at {abs(mean_speed):.4g} rad/s): the "
                         "tooth ratio is not defined (reported as n/a) and the ripples are partial; "
                         f"run for at least {scene.operating.ramp_time + 2 * need:.3g} s")
+    elif phi1.size > 1 and not (np.all(np.diff(phi1) > 0) or np.all(np.diff(phi1) < 0)):
+        # tooth_ratio's other n/a: a driver that turns back within the window (a soft input
+        # shaft ringing, a driven inertia pulling the chain round)
+        w1 = result["driver.speed"][mask]
+        warnings.append(f"the driver sprocket turns back within the steady window from "
+                        f"{float(t[mask][0]):g} s (its speed between {float(np.min(w1)):.4g} "
+                        f"and {float(np.max(w1)):.4g} rad/s about a mean of {mean_speed:.4g}): "
+                        "the tooth ratio over whole driver tooth periods is not defined "
+                        "(reported as n/a); the driver's vibration about its mean speed is "
+                        "what to look at (input_shaft.stiffness, the driven inertia)")
     found = getattr(result, "problems", [])
     warnings += [p.text for p in found]
     out = {
