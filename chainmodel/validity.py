@@ -67,6 +67,15 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   2 f_1 / n) lie above it too. Above the line level 1 also passes on some drives (xu2010 at
   30, 45 and 75 rpm; the 08B fan at 600 rpm, f_m / f_1 = 13: 1.4 / 1.9 % low), so the warning
   says "may".
+* **span vibration** (level 2): its spans' mean tension sum, over the same samples and
+  judged at the same instants as the span-modes check, against a rigid chain's (twice the
+  static tension, or the load's tension difference over a slack span at the weight's floor
+  where more, plus both spans' centrifugal tension rho v^2; seed 004 eqs 15-16). A warning at
+  :data:`VIBRATION_RATIO` = 3 x: there level 2's string mode, stiffened by its own stretch,
+  has followed the meshing up and its stretch carries most of the tension. On an 08A 9/10 drive
+  of 25 links level 2 read 1.5-5.8 x level 3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x
+  the rigid chain's); on the trade study's scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7
+  x (docs/reduced_models.md, "Level 2's spans locked on the meshing").
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
   level 3's initial layout is over by then). A warning: a torsional vibration larger than the
@@ -97,8 +106,9 @@ REVERSAL_SPEED = 1e-3
 
 OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_force",
            "chain.max_link_tension", "chain.min_link_tension")
-#: what the span-modes check of levels 0-1 reads besides OUTPUTS
-SPAN_OUTPUTS = ("slack_span.tension", "driver.speed")
+#: what the span checks read besides OUTPUTS (levels 0-1's span modes the first two, level
+#: 2's span vibration all three)
+SPAN_OUTPUTS = ("slack_span.tension", "driver.speed", "tight_span.tension")
 #: levels 0-1 warn where the meshing frequency reaches this share of the slack span's first
 #: string frequency (its second harmonic at 0.8 of it; module docstring, "span modes missing")
 SPAN_MODE_SHARE = 0.4
@@ -109,13 +119,19 @@ SPAN_MODE_SHARE = 0.4
 #: a start-up mean, nor the library on a partial last tooth period, where the other would not
 SPAN_START_PERIODS = 2
 SPAN_JUDGE_PERIODS = 4
+#: level 2 warns where its span tensions' mean sum over whole driver tooth periods is this many
+#: times the quasi-static sum (:meth:`Monitor._quasi_static_sum`): its string modes' stretch,
+#: locked on the meshing, then carries most of the tension (module docstring, "span
+#: vibration"; on the trade study's scenes level 2 reads 1.1-1.6 x, level 3 up to 2.6 x)
+VIBRATION_RATIO = 3.0
 
 
 @dataclass(frozen=True)
 class Problem:
     """One finding: ``code`` (chain_too_long, chain_too_short, breaking_load,
     penetration_roller, teeth_skipped, driven_reversal, damper_losses, span_modes_missing,
-    ...), the sentence, and whether it makes the result meaningless."""
+    span_vibration, hanging_spans, ...), the sentence, and whether it makes the result
+    meaningless."""
 
     code: str
     message: str
@@ -149,6 +165,7 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
           "implausible_value": "a chain value far from its ISO 606 chain's",
           "hanging_spans": "spans hanging along their length at level 1 or 2",
+          "span_vibration": "level 2's spans vibrating beyond its string model",
           "start_unloaded": "level 3 started unloaded: no static equilibrium under the load"}
 
 
@@ -408,6 +425,8 @@ class _Stats:
     slack_sum: float = 0.0         # slack-span tension and driver speed summed over the
     speed_sum: float = 0.0         # samples once the driver has turned a tooth (levels 0-1)
     span_samples: int = 0
+    tight_sum: float = 0.0         # tight-span tension and load torque summed over the same
+    load_sum: float = 0.0          # samples (level 2's span-vibration check)
     span_periods: float = 0.0      # driver tooth periods turned (from the first sample)
 
 
@@ -441,9 +460,11 @@ class Monitor:
                          if self._losses is not None and names is not None
                          and all(n in names for n in LOSS_OUTPUTS) else None)
         self._span_ix = (tuple(names.index(n) for n in SPAN_OUTPUTS)
-                         if self.level <= 1 and names is not None
+                         if self.level <= 2 and names is not None
                          and all(n in names for n in SPAN_OUTPUTS) else None)
         self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
+        self._vibration = None      # level 2: (span tension sum, quasi-static sum) that fired
+        self._static = None         # (static tension, hanging floor), when first judged
 
     # -- sample by sample --------------------------------------------------------------------
     def update(self, t: float, row, input_speed: float, load_torque: float = 0.0) -> list[str]:
@@ -462,12 +483,15 @@ class Monitor:
                 s = self.stats
                 s.slack_sum += float(row[self._span_ix[0]])
                 s.speed_sum += abs(float(row[self._span_ix[1]]))
+                if self.level == 2:
+                    s.tight_sum += float(row[self._span_ix[2]])
+                    s.load_sum += float(load_torque)
                 s.span_samples += 1
                 s.span_periods = max(s.span_periods, turned)
                 if self._k != k:        # judged at each whole driver tooth period
                     self._span_judge(s.speed_sum, s.slack_sum, s.span_samples,
-                                     s.span_periods)
-                    span = self._span_found is not None
+                                     s.span_periods, s.tight_sum, s.load_sum)
+                    span = self._span_found is not None or self._vibration is not None
         losses = False
         if self._loss_ix is not None:
             self._losses.add_one(float(t), *(float(row[i]) for i in self._loss_ix),
@@ -574,9 +598,13 @@ class Monitor:
                 s.t_reversal = float(t[np.argmax(rev)])
             s.reversal = min(s.reversal, float(np.min(along[rev])))
         k = np.floor((phi1 - phi0) / self.period)
-        if self.level <= 1 and all(n in outputs for n in SPAN_OUTPUTS):
+        # levels 0-1's span-modes check reads the slack span, level 2's the tight one too
+        need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
+        if self.level <= 2 and all(n in outputs for n in need):
             self._span_arrays(phi1, k, np.asarray(outputs["slack_span.tension"], float),
-                              np.abs(np.asarray(outputs["driver.speed"], float)))
+                              np.abs(np.asarray(outputs["driver.speed"], float)),
+                              np.asarray(outputs.get("tight_span.tension", 0.0 * t), float),
+                              np.broadcast_to(np.asarray(load_torque, float), t.shape))
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
                             float(t[0]))
@@ -586,35 +614,66 @@ class Monitor:
         self._last = (float(phi1[-1]), float(te[-1]), float(t[-1]))
         self._k = int(k[-1])
 
-    def _span_arrays(self, phi1, k, slack, speed):
-        """The span-modes sums of a whole run, judged at every whole driver tooth period as
+    def _span_arrays(self, phi1, k, slack, speed, tight, load):
+        """The span checks' sums of a whole run, judged at every whole driver tooth period as
         :meth:`update` judges them sample by sample (the same samples, the same verdicts)."""
         s = self.stats
         periods = np.abs(phi1 - self._start[0]) / self.period
         counted = periods >= SPAN_START_PERIODS
         slack_sum = s.slack_sum + np.cumsum(np.where(counted, slack, 0.0))
         speed_sum = s.speed_sum + np.cumsum(np.where(counted, speed, 0.0))
+        if self.level == 2:     # the span-vibration check's sums
+            tight_sum = s.tight_sum + np.cumsum(np.where(counted, tight, 0.0))
+            load_sum = s.load_sum + np.cumsum(np.where(counted, load, 0.0))
+        else:
+            tight_sum = load_sum = np.zeros(len(counted))
         samples = s.span_samples + np.cumsum(counted)
         turned = np.maximum(s.span_periods, np.maximum.accumulate(np.where(counted, periods,
                                                                            0.0)))
         previous = np.concatenate(([self._k], k[:-1]))
         for i in np.flatnonzero(counted & (k != previous) & (turned >= SPAN_JUDGE_PERIODS)):
             self._span_judge(float(speed_sum[i]), float(slack_sum[i]), int(samples[i]),
-                             float(turned[i]))
+                             float(turned[i]), float(tight_sum[i]), float(load_sum[i]))
         s.slack_sum, s.speed_sum = float(slack_sum[-1]), float(speed_sum[-1])
+        s.tight_sum, s.load_sum = float(tight_sum[-1]), float(load_sum[-1])
         s.span_samples, s.span_periods = int(samples[-1]), float(turned[-1])
 
     # -- the findings ----------------------------------------------------------------------------
-    def _span_judge(self, speed_sum, slack_sum, samples, periods):
-        """Judge the span-modes check on these sums; keeps (meshing frequency, slack span's
-        first string frequency [Hz], mean slack tension [N]) when the meshing reaches
-        SPAN_MODE_SHARE of that frequency (levels 0-1). A verdict that fired stays (a warning
-        is not taken back, as in the FMU's log)."""
-        if self.level > 1 or not samples or periods < SPAN_JUDGE_PERIODS:
+    def _span_judge(self, speed_sum, slack_sum, samples, periods, tight_sum=0.0,
+                    load_sum=0.0):
+        """Judge the span checks on these sums. Levels 0-1: keeps (meshing frequency, slack
+        span's first string frequency [Hz], mean slack tension [N]) when the meshing reaches
+        SPAN_MODE_SHARE of that frequency. Level 2: keeps (the spans' mean tension sum, the
+        quasi-static sum [N]) when the first is VIBRATION_RATIO times the second. A verdict
+        that fired stays (a warning is not taken back, as in the FMU's log)."""
+        if not samples or periods < SPAN_JUDGE_PERIODS:
+            return
+        if self.level == 2:
+            total = (tight_sum + slack_sum) / samples
+            quasi = self._quasi_static_sum(speed_sum / samples, load_sum / samples)
+            if total > VIBRATION_RATIO * quasi:
+                self._vibration = (total, quasi)
+            return
+        if self.level > 1:
             return
         found = self._span_modes(speed_sum / samples, slack_sum / samples)
         if found is not None:
             self._span_found = found
+
+    def _quasi_static_sum(self, speed, load):
+        """What a rigid chain's two spans carry together at mean |driver speed| ``speed`` and
+        mean load torque ``load`` [N]: twice the static tension, or the load's tension
+        difference over a slack span at the weight's floor where that is more, plus both
+        spans' centrifugal tension (seed 004 eqs 15-16; span_sag.hanging_tension)."""
+        from .models.kinematic import centrifugal_tension
+        from .models.span_sag import hanging_tension
+        from .models.wrap_statics import static_span_tension
+        d, p = self.drive, self.params
+        if self._static is None:
+            self._static = (static_span_tension(d, p), hanging_tension(d, p))
+        static, hang = self._static
+        held = max(2.0 * static, abs(load) / d.driven.pitch_radius + 2.0 * hang)
+        return held + 2.0 * float(centrifugal_tension(d, p, speed))
 
     def _span_modes(self, speed, slack):
         """(f_m, f_1, slack) at mean |driver speed| ``speed`` and mean slack tension ``slack``
@@ -683,6 +742,18 @@ class Monitor:
                 f"check against fidelity 2 or 3"
                 + (f", or run below {below:g} rpm" if below >= 1.0 else
                    " (its slack span carries almost no tension)"))))
+        if self._vibration is not None:
+            total, quasi = self._vibration
+            out.append(Problem("span_vibration", (
+                f"level 2's spans vibrate beyond its string model's range: over whole driver "
+                f"tooth periods their tensions sum to {total:.4g} N, {total / quasi:.3g} x the "
+                f"{quasi:.4g} N a rigid chain's spans carry here (twice the static tension or "
+                f"the load's tension difference, plus the centrifugal tension; warned from "
+                f"{VIBRATION_RATIO:g} x): the stretch of its string modes, locked on the "
+                f"meshing, carries the rest. On an 08A 9/10 drive of 25 links at 600-1200 rpm "
+                f"level 2's span tensions summed to 1.5-5.8 x level 3's, whose own sum was "
+                f"2.2-2.6 x the rigid chain's; take span tensions from level 3 "
+                f"(docs/reduced_models.md, \"Level 2's spans locked on the meshing\")")))
         if self.level >= 1:
             half = math.pi / d.n_driven
             slack = self._skip_limit - half

@@ -1,0 +1,71 @@
+"""Level 2's spans locked on the meshing (chainmodel.validity, code span_vibration;
+docs/reduced_models.md, "Level 2's spans locked on the meshing").
+
+An independent audit (twenty-second session) found level 2 on a small 08A 9/10 drive of 25
+links at 900-1200 rpm reading 2-6x level 3's span tensions with no warning: its one string
+mode per span, stiffened by its own stretch, follows the meshing up. Checked here against
+level 3 of the same drive and a rigid chain's tension written in the test (twice the static
+tension plus both spans' centrifugal tension rho v^2, seed 004 eqs 15-16, with v the driver's
+pitch-circle speed).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import chainmodel
+from chainmodel.scene import load_scene
+from chainmodel.validity import VIBRATION_RATIO, Monitor
+
+#: the audit's drive: 08A 9/10, 25 links where they wrap tightly, sprockets as steel discs
+SMALL = dict(chain="08A", drive_pitch=0.0127, drive_driver_teeth=9, drive_driven_teeth=10,
+             drive_links=25, drive_centre_distance=0.0, load_torque=3.0,
+             driver_inertia=1.465e-5, driven_inertia=2.199e-5, duration=0.4)
+
+
+def _sum(r):
+    m = r.time >= 0.2
+    return float(np.mean(r["tight_span.tension"][m]) + np.mean(r["slack_span.tension"][m]))
+
+
+def test_level2_locked_on_the_meshing_is_warned_and_level3_is_not():
+    rpm = 900.0
+    r2 = chainmodel.simulate("xu2010", fidelity=2, input_speed_rpm=rpm, **SMALL)
+    r3 = chainmodel.simulate("xu2010", fidelity=3, input_speed_rpm=rpm, **SMALL)
+    p, d = r2.scene.parameters, r2.scene.drive
+    v = rpm * math.pi / 30.0 * d.driver.pitch_radius
+    rigid = 2.0 * r2.static_tension + 2.0 * p["chain.link_mass"] / d.pitch * v * v
+    # the premise: level 2's spans far above a rigid chain's and above level 3's
+    assert _sum(r2) > VIBRATION_RATIO * rigid
+    assert _sum(r2) > 2.0 * _sum(r3)
+    assert "span_vibration" in [q.code for q in r2.problems]
+    assert "span_vibration" not in [q.code for q in r3.problems]
+
+
+@pytest.mark.parametrize("name,rpm", [("xu2010", 120.0), ("xu2010", 600.0), ("C1", 100.0),
+                                      ("C1", 400.0)])
+def test_the_trade_studys_scenes_are_not_warned(name, rpm):
+    """Level 2 near C1's torsional resonance and at xu2010's fast points reads 1.1-1.6x a rigid
+    chain's sum, as level 3 does (1.2-1.7x): not its strings running away."""
+    r = chainmodel.simulate(name, fidelity=2, input_speed_rpm=rpm, duration=0.6)
+    assert "span_vibration" not in [q.code for q in r.problems]
+
+
+def test_the_fmu_path_says_what_the_whole_run_says():
+    """Sample by sample (the FMU's Monitor.update) the check fires once, as on the whole run."""
+    from chainmodel.models import ALL_OUTPUTS
+    rpm = 900.0
+    r = chainmodel.simulate("xu2010", fidelity=2, input_speed_rpm=rpm, **SMALL)
+    sc = load_scene("xu2010", fidelity=2, input_speed_rpm=rpm, **SMALL)
+    names = [o.name for o in ALL_OUTPUTS]
+    rows = np.column_stack([r[n] for n in names])
+    mon = Monitor(sc.drive, sc.parameters, 2, names)
+    said = []
+    for t, row in zip(r.time, rows):
+        said += mon.update(t, row, rpm * math.pi / 30.0, SMALL["load_torque"])
+    whole = [q for q in r.problems if q.code == "span_vibration"]
+    assert len(whole) == 1
+    assert sum("vibrate beyond its string model" in s for s in said) == 1
