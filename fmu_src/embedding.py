@@ -284,6 +284,11 @@ def _guard(method):
                     ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
             except Exception:  # pragma: no cover - not CPython
                 pass
+            # pythonfmu logs the exception's repr as the FMI logger's format string (its
+            # handle_py_exception, passed on by fmi2.cpp's logger with no arguments): a '%' in
+            # a sentence ("5 % or more") is a printf conversion reading an argument that is not
+            # there
+            exc.args = tuple(fmi_text(a) if isinstance(a, str) else a for a in exc.args)
             raise
     return entry
 

@@ -428,6 +428,15 @@ def test_bad_real_parameter_fails_initialization_naming_it(chaindrive_fmu_dir):
     assert "drive.pitch" in log
 
 
+def test_an_error_sentence_with_a_percent_sign_reaches_the_host_as_words(chaindrive_fmu_dir):
+    """FMI log messages are printf formats (fmpy's proxy formats them, as C hosts do): the
+    pretension error's "5 % or more" arrives as "5 percent or more", no conversion in any
+    message (tests/test_fmu_embedding.py checks the exception's own text)."""
+    log = _initialization_error(chaindrive_fmu_dir, {"chain.pretension": 1e9})
+    assert "chain.pretension" in log and "5 percent or more" in log
+    assert "%" not in log
+
+
 def test_fidelity_out_of_range_or_missing_is_named(chaindrive_fmu_dir):
     assert "fidelity" in _initialization_error(chaindrive_fmu_dir, {"fidelity": 7})
     missing = [k for k in range(4) if k not in MODEL_CLASSES]

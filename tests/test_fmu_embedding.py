@@ -311,3 +311,32 @@ def test_log_messages_carry_no_percent_sign():
     text = embedding.fmi_text("keeps this tension within 5 % of the pitch; 3% more")
     assert text == "keeps this tension within 5 percent of the pitch; 3 percent more"
     assert "%" not in embedding.fmi_text("%%d %s 100%")
+
+
+def test_an_exception_leaving_an_entry_point_carries_no_percent_sign():
+    """pythonfmu's handle_py_exception puts the exception's repr into the message it passes to
+    the FMI logger as the format (PythonFMU's PySlaveInstance.cpp; 0.7 as installed says
+    "unknown error" instead, a later one the text): the guard round every entry point writes
+    the word there too, and keeps the exception's type."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("_test_embedding_guard",
+                                                  ROOT / "fmu_src" / "embedding.py")
+    embedding = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(embedding)
+    logged = []
+
+    class Instance:
+        log_queue = []
+
+        def log(self, message, status):
+            logged.append(message)
+
+        def exit_initialization_mode(self):
+            raise ValueError("would pre-strain the chain by 5 % or more", 7)
+
+    guarded = embedding._guard(Instance.exit_initialization_mode)
+    with pytest.raises(ValueError) as err:
+        guarded(Instance())
+    assert "%" not in repr(err.value) and "5 percent or more" in repr(err.value)
+    assert err.value.args[1] == 7
+    assert logged and all("%" not in m for m in logged)
