@@ -71,9 +71,10 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   judged at the same instants as the span-modes check, against a rigid chain's (twice the
   static tension, or the load's tension difference over a slack span at the weight's floor
   where more, plus both spans' centrifugal tension rho v^2; seed 004 eqs 15-16). A warning at
-  :data:`VIBRATION_RATIO` = 3 x: there level 2's string mode, stiffened by its own stretch,
-  has followed the meshing up and its stretch carries most of the tension. On an 08A 9/10 drive
-  of 25 links level 2 read 1.5-5.8 x level 3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x
+  :data:`VIBRATION_RATIO` = 3 x and by more than :data:`VIBRATION_FLOOR` = 1 % of the
+  breaking load (a chain carrying next to nothing is not running away): there level 2's
+  string mode, stiffened by its own stretch, has followed the meshing up and its stretch
+  carries most of the tension. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level 3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x
   the rigid chain's); on the trade study's scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7
   x (docs/reduced_models.md, "Level 2's spans locked on the meshing").
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
@@ -124,6 +125,9 @@ SPAN_JUDGE_PERIODS = 4
 #: locked on the meshing, then carries most of the tension (module docstring, "span
 #: vibration"; on the trade study's scenes level 2 reads 1.1-1.6 x, level 3 up to 2.6 x)
 VIBRATION_RATIO = 3.0
+#: ... and exceeds it by at least this share of the chain's breaking load (where known: the
+#: 08A audit drive's locked runs by 2.4-15 %)
+VIBRATION_FLOOR = 0.01
 
 
 @dataclass(frozen=True)
@@ -464,6 +468,7 @@ class Monitor:
                          and all(n in names for n in SPAN_OUTPUTS) else None)
         self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
         self._vibration = None      # level 2: (span tension sum, quasi-static sum) that fired
+        self._vibration_floor = VIBRATION_FLOOR * (bl[0] if bl is not None else 0.0)
         self._static = None         # (static tension, hanging floor), when first judged
 
     # -- sample by sample --------------------------------------------------------------------
@@ -651,7 +656,9 @@ class Monitor:
         if self.level == 2:
             total = (tight_sum + slack_sum) / samples
             quasi = self._quasi_static_sum(speed_sum / samples, load_sum / samples)
-            if total > VIBRATION_RATIO * quasi:
+            # and by more than a share of the breaking load: a chain carrying next to nothing
+            # (no weight, no pretension) is not a span running away
+            if total > VIBRATION_RATIO * quasi and total - quasi > self._vibration_floor:
                 self._vibration = (total, quasi)
             return
         if self.level > 1:

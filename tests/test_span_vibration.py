@@ -69,3 +69,31 @@ def test_the_fmu_path_says_what_the_whole_run_says():
     whole = [q for q in r.problems if q.code == "span_vibration"]
     assert len(whole) == 1
     assert sum("vibrate beyond its string model" in s for s in said) == 1
+
+
+def test_a_chain_carrying_next_to_nothing_is_not_warned():
+    """On made-up outputs of the small 08A drive with no weight and no pretension (static
+    tension 0 N, so its rigid-chain sum is the centrifugal tension, under a newton at 120
+    rpm): spans at 10 N each are many times that sum but next to nothing against the 13.9 kN
+    breaking load, and are not warned; at 500 N each they are."""
+    from chainmodel.models.wrap_statics import static_span_tension
+    from chainmodel.validity import breaking_load, output_problems
+
+    sc = load_scene("xu2010", fidelity=2, **SMALL)
+    p = dict(sc.parameters, gravity=0.0)
+    assert p["chain.pretension"] == 0.0 and static_span_tension(sc.drive, p) == 0.0
+    w1 = 4 * math.pi
+    t = np.linspace(0.0, 0.5, 5001)
+    assert breaking_load(sc.drive, p)[0] > 1e4
+
+    def found(each):
+        out = {"driver.angle": w1 * t, "driver.speed": np.full_like(t, w1),
+               "driven.speed": np.full_like(t, w1 * 9 / 10), "transmission_error": 0 * t,
+               "contact.max_force": 0 * t, "chain.max_link_tension": np.full_like(t, each),
+               "chain.min_link_tension": np.full_like(t, each),
+               "tight_span.tension": np.full_like(t, each),
+               "slack_span.tension": np.full_like(t, each)}
+        return [q.code for q in output_problems(sc.drive, p, 2, t, out, w1)]
+
+    assert "span_vibration" not in found(10.0)
+    assert "span_vibration" in found(500.0)
