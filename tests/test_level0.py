@@ -452,3 +452,22 @@ def test_level0_on_the_wrap_is_level1_running_slowly():
         m = r.time >= 0.3
         means.append((r["tight_span.tension"][m].mean(), r["slack_span.tension"][m].mean()))
     assert means[0] == pytest.approx(means[1], rel=0.02)
+
+
+@pytest.mark.parametrize("floor,ks", [(0.0, 0.0), (40.0, 0.0), (0.0, 5e4)])
+def test_no_span_below_the_hanging_floor_and_the_torque_balance_kept(floor, ks):
+    """Level 0's split with the weight along the spans (span_sag.hanging_tension) as a floor:
+    over loads of both signs, from none to far beyond what the spans' sum can split, neither
+    span is below the floor, the driven sprocket's balance T_pull a_pull - T_back a_back =
+    load holds, and where both spans were above it the split is the one without it."""
+    from chainmodel.models.kinematic import split_tensions
+    total, hang, a_pull, a_back = 600.0, 25.0, 0.05, 0.04
+    load = np.linspace(-200.0, 200.0, 801)
+    free = split_tensions(total, a_pull, a_back, load, floor, ks, ks)
+    t_pull, t_back = split_tensions(total, a_pull, a_back, load, floor, ks, ks, hang)
+    assert np.all(t_pull >= hang * (1 - 1e-12)) and np.all(t_back >= hang * (1 - 1e-12))
+    np.testing.assert_allclose(t_pull * a_pull - t_back * a_back, load, rtol=0, atol=1e-9)
+    above = (free[0] >= hang) & (free[1] >= hang)
+    assert above.any() and (~above).any()
+    np.testing.assert_array_equal(t_pull[above], free[0][above])
+    np.testing.assert_array_equal(t_back[above], free[1][above])

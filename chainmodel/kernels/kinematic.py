@@ -147,11 +147,14 @@ def split(total, floor, arm_pull, arm_back, load, ks_pull=0.0, ks_back=0.0, hang
     below hangs from its upper end, its lower end looping off the sprocket, and the other
     span carries the torque balance on top of it."""
     t_pull, t_back = _split(total, floor, arm_pull, arm_back, load, ks_pull, ks_back)
-    if t_back < hang:
-        return (load + hang * arm_back) / arm_pull, hang
-    if t_pull < hang:
-        return hang, (hang * arm_pull - load) / arm_back
-    return t_pull, t_back
+    if t_back >= hang and t_pull >= hang:
+        return t_pull, t_back
+    # one span at the floor, the other by the torque balance: the one the balance leaves at or
+    # above it
+    on_back = (load + hang * arm_back) / arm_pull
+    if on_back >= hang:
+        return on_back, hang
+    return hang, (hang * arm_pull - load) / arm_back
 
 
 @jit
