@@ -68,15 +68,18 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   30, 45 and 75 rpm; the 08B fan at 600 rpm, f_m / f_1 = 13: 1.4 / 1.9 % low), so the warning
   says "may".
 * **span vibration** (level 2): its spans' mean tension sum, over the same samples and
-  judged at the same instants as the span-modes check, against a rigid chain's (twice the
-  static tension, or the load's tension difference over a slack span at the weight's floor
-  where more, plus both spans' centrifugal tension rho v^2; seed 004 eqs 15-16). A warning at
+  judged at the same instants as the span-modes check, against a rigid chain's, sample by
+  sample (twice the static tension, or the driven sprocket's tension difference |load +
+  driven damping x speed| / R_o over a slack span at the weight's floor where more, plus both
+  spans' centrifugal tension rho v^2; seed 004 eqs 15-16). A warning at
   :data:`VIBRATION_RATIO` = 3 x and by more than :data:`VIBRATION_FLOOR` = 1 % of the
-  breaking load (a chain carrying next to nothing is not running away): there level 2's
+  breaking load (a chain carrying next to nothing is not running away; without a breaking
+  load, a pitch no ISO 606 chain has and no chain.breaking_load, no check): there level 2's
   string mode, stiffened by its own stretch, has followed the meshing up and its stretch
-  carries most of the tension. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level 3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x
-  the rigid chain's); on the trade study's scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7
-  x (docs/reduced_models.md, "Level 2's spans locked on the meshing").
+  carries most of the tension. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level
+  3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x the rigid chain's); on the trade study's
+  scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7 x (docs/reduced_models.md, "Level 2's
+  spans locked on the meshing").
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
   level 3's initial layout is over by then). A warning: a torsional vibration larger than the
@@ -121,7 +124,7 @@ SPAN_MODE_SHARE = 0.4
 SPAN_START_PERIODS = 2
 SPAN_JUDGE_PERIODS = 4
 #: level 2 warns where its span tensions' mean sum over whole driver tooth periods is this many
-#: times the quasi-static sum (:meth:`Monitor._quasi_static_sum`): its string modes' stretch,
+#: times the rigid chain's sum (:meth:`Monitor.rigid_sum`): its string modes' stretch,
 #: locked on the meshing, then carries most of the tension (module docstring, "span
 #: vibration"; on the trade study's scenes level 2 reads 1.1-1.6 x, level 3 up to 2.6 x)
 VIBRATION_RATIO = 3.0
@@ -429,8 +432,8 @@ class _Stats:
     slack_sum: float = 0.0         # slack-span tension and driver speed summed over the
     speed_sum: float = 0.0         # samples once the driver has turned a tooth (levels 0-1)
     span_samples: int = 0
-    tight_sum: float = 0.0         # tight-span tension and load torque summed over the same
-    load_sum: float = 0.0          # samples (level 2's span-vibration check)
+    tight_sum: float = 0.0         # tight-span tension and the rigid chain's span sum over the
+    rigid_sum: float = 0.0         # same samples (level 2's span-vibration check)
     span_periods: float = 0.0      # driver tooth periods turned (from the first sample)
 
 
@@ -463,13 +466,17 @@ class Monitor:
         self._loss_ix = (tuple(names.index(n) for n in LOSS_OUTPUTS)
                          if self._losses is not None and names is not None
                          and all(n in names for n in LOSS_OUTPUTS) else None)
-        self._span_ix = (tuple(names.index(n) for n in SPAN_OUTPUTS)
+        # levels 0-1's span-modes check reads the slack span, level 2's the tight one too
+        need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
+        self._span_ix = (tuple(names.index(n) for n in need)
                          if self.level <= 2 and names is not None
-                         and all(n in names for n in SPAN_OUTPUTS) else None)
+                         and all(n in names for n in need) else None)
         self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
-        self._vibration = None      # level 2: (span tension sum, quasi-static sum) that fired
-        self._vibration_floor = VIBRATION_FLOOR * (bl[0] if bl is not None else 0.0)
-        self._static = None         # (static tension, hanging floor), when first judged
+        self._vibration = None      # level 2: (span tension sum, rigid chain's sum) that fired
+        # the span-vibration check needs the breaking load for its floor (VIBRATION_FLOOR):
+        # without one (a pitch no ISO 606 chain has, no chain.breaking_load) it is not made
+        self._vibration_floor = None if bl is None else VIBRATION_FLOOR * bl[0]
+        self._rigid = None          # rigid_sum's constants, when first needed
 
     # -- sample by sample --------------------------------------------------------------------
     def update(self, t: float, row, input_speed: float, load_torque: float = 0.0) -> list[str]:
@@ -490,12 +497,13 @@ class Monitor:
                 s.speed_sum += abs(float(row[self._span_ix[1]]))
                 if self.level == 2:
                     s.tight_sum += float(row[self._span_ix[2]])
-                    s.load_sum += float(load_torque)
+                    s.rigid_sum += float(self.rigid_sum(float(row[self._span_ix[1]]),
+                                                        float(row[b]), float(load_torque)))
                 s.span_samples += 1
                 s.span_periods = max(s.span_periods, turned)
                 if self._k != k:        # judged at each whole driver tooth period
                     self._span_judge(s.speed_sum, s.slack_sum, s.span_samples,
-                                     s.span_periods, s.tight_sum, s.load_sum)
+                                     s.span_periods, s.tight_sum, s.rigid_sum)
                     span = self._span_found is not None or self._vibration is not None
         losses = False
         if self._loss_ix is not None:
@@ -606,10 +614,13 @@ class Monitor:
         # levels 0-1's span-modes check reads the slack span, level 2's the tight one too
         need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
         if self.level <= 2 and all(n in outputs for n in need):
+            speed = np.asarray(outputs["driver.speed"], float)
             self._span_arrays(phi1, k, np.asarray(outputs["slack_span.tension"], float),
-                              np.abs(np.asarray(outputs["driver.speed"], float)),
+                              np.abs(speed),
                               np.asarray(outputs.get("tight_span.tension", 0.0 * t), float),
-                              np.broadcast_to(np.asarray(load_torque, float), t.shape))
+                              self.rigid_sum(speed, w2, np.broadcast_to(
+                                  np.asarray(load_torque, float), t.shape))
+                              if self.level == 2 else None)
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
                             float(t[0]))
@@ -619,7 +630,7 @@ class Monitor:
         self._last = (float(phi1[-1]), float(te[-1]), float(t[-1]))
         self._k = int(k[-1])
 
-    def _span_arrays(self, phi1, k, slack, speed, tight, load):
+    def _span_arrays(self, phi1, k, slack, speed, tight, rigid):
         """The span checks' sums of a whole run, judged at every whole driver tooth period as
         :meth:`update` judges them sample by sample (the same samples, the same verdicts)."""
         s = self.stats
@@ -629,37 +640,40 @@ class Monitor:
         speed_sum = s.speed_sum + np.cumsum(np.where(counted, speed, 0.0))
         if self.level == 2:     # the span-vibration check's sums
             tight_sum = s.tight_sum + np.cumsum(np.where(counted, tight, 0.0))
-            load_sum = s.load_sum + np.cumsum(np.where(counted, load, 0.0))
+            rigid_sum = s.rigid_sum + np.cumsum(np.where(counted, rigid, 0.0))
         else:
-            tight_sum = load_sum = np.zeros(len(counted))
+            tight_sum = rigid_sum = np.zeros(len(counted))
         samples = s.span_samples + np.cumsum(counted)
         turned = np.maximum(s.span_periods, np.maximum.accumulate(np.where(counted, periods,
                                                                            0.0)))
         previous = np.concatenate(([self._k], k[:-1]))
         for i in np.flatnonzero(counted & (k != previous) & (turned >= SPAN_JUDGE_PERIODS)):
             self._span_judge(float(speed_sum[i]), float(slack_sum[i]), int(samples[i]),
-                             float(turned[i]), float(tight_sum[i]), float(load_sum[i]))
+                             float(turned[i]), float(tight_sum[i]), float(rigid_sum[i]))
         s.slack_sum, s.speed_sum = float(slack_sum[-1]), float(speed_sum[-1])
-        s.tight_sum, s.load_sum = float(tight_sum[-1]), float(load_sum[-1])
+        s.tight_sum, s.rigid_sum = float(tight_sum[-1]), float(rigid_sum[-1])
         s.span_samples, s.span_periods = int(samples[-1]), float(turned[-1])
 
     # -- the findings ----------------------------------------------------------------------------
     def _span_judge(self, speed_sum, slack_sum, samples, periods, tight_sum=0.0,
-                    load_sum=0.0):
+                    rigid_sum=0.0):
         """Judge the span checks on these sums. Levels 0-1: keeps (meshing frequency, slack
         span's first string frequency [Hz], mean slack tension [N]) when the meshing reaches
         SPAN_MODE_SHARE of that frequency. Level 2: keeps (the spans' mean tension sum, the
-        quasi-static sum [N]) when the first is VIBRATION_RATIO times the second. A verdict
+        rigid chain's [N], both means over the samples) when the first is VIBRATION_RATIO
+        times the second and above it by VIBRATION_FLOOR of the breaking load. A verdict
         that fired stays (a warning is not taken back, as in the FMU's log)."""
         if not samples or periods < SPAN_JUDGE_PERIODS:
             return
         if self.level == 2:
+            if self._vibration_floor is None:
+                return
             total = (tight_sum + slack_sum) / samples
-            quasi = self._quasi_static_sum(speed_sum / samples, load_sum / samples)
+            rigid = rigid_sum / samples
             # and by more than a share of the breaking load: a chain carrying next to nothing
             # (no weight, no pretension) is not a span running away
-            if total > VIBRATION_RATIO * quasi and total - quasi > self._vibration_floor:
-                self._vibration = (total, quasi)
+            if total > VIBRATION_RATIO * rigid and total - rigid > self._vibration_floor:
+                self._vibration = (total, rigid)
             return
         if self.level > 1:
             return
@@ -667,20 +681,25 @@ class Monitor:
         if found is not None:
             self._span_found = found
 
-    def _quasi_static_sum(self, speed, load):
-        """What a rigid chain's two spans carry together at mean |driver speed| ``speed`` and
-        mean load torque ``load`` [N]: twice the static tension, or the load's tension
-        difference over a slack span at the weight's floor where that is more, plus both
-        spans' centrifugal tension (seed 004 eqs 15-16; span_sag.hanging_tension)."""
-        from .models.kinematic import centrifugal_tension
-        from .models.span_sag import hanging_tension
-        from .models.wrap_statics import static_span_tension
-        d, p = self.drive, self.params
-        if self._static is None:
-            self._static = (static_span_tension(d, p), hanging_tension(d, p))
-        static, hang = self._static
-        held = max(2.0 * static, abs(load) / d.driven.pitch_radius + 2.0 * hang)
-        return held + 2.0 * float(centrifugal_tension(d, p, speed))
+    def rigid_sum(self, driver_speed, driven_speed, load):
+        """What a rigid chain's two spans carry together at a sample [N] (numbers or arrays):
+        twice the static tension, or, where more, the tension difference the driven sprocket
+        asks, |load + driven.damping x driven speed| / R_o, over a slack span at the weight's
+        floor; plus both spans' centrifugal tension (seed 004 eqs 15-16; span_sag.
+        hanging_tension). Taken sample by sample, so an alternating load counts as it
+        alternates; the driven sprocket's inertia torque, whose mean over a tooth period is
+        nil, is left out."""
+        if self._rigid is None:
+            from .models.kinematic import centrifugal_tension
+            from .models.span_sag import hanging_tension
+            from .models.wrap_statics import static_span_tension
+            d, p = self.drive, self.params
+            self._rigid = (2.0 * static_span_tension(d, p), 2.0 * hanging_tension(d, p),
+                           p["driven.damping"], 1.0 / d.driven.pitch_radius,
+                           2.0 * float(centrifugal_tension(d, p, 1.0)))
+        static2, hang2, damping, inv_r, centrifugal2 = self._rigid
+        held = np.maximum(static2, np.abs(load + damping * driven_speed) * inv_r + hang2)
+        return held + centrifugal2 * driver_speed * driver_speed
 
     def _span_modes(self, speed, slack):
         """(f_m, f_1, slack) at mean |driver speed| ``speed`` and mean slack tension ``slack``
@@ -750,12 +769,13 @@ class Monitor:
                 + (f", or run below {below:g} rpm" if below >= 1.0 else
                    " (its slack span carries almost no tension)"))))
         if self._vibration is not None:
-            total, quasi = self._vibration
+            total, rigid = self._vibration
             out.append(Problem("span_vibration", (
                 f"level 2's spans vibrate beyond its string model's range: over whole driver "
-                f"tooth periods their tensions sum to {total:.4g} N, {total / quasi:.3g} x the "
-                f"{quasi:.4g} N a rigid chain's spans carry here (twice the static tension or "
-                f"the load's tension difference, plus the centrifugal tension; warned from "
+                f"tooth periods their tensions sum to {total:.4g} N, {total / rigid:.3g} x the "
+                f"{rigid:.4g} N a rigid chain's spans carry here (twice the static tension or "
+                f"the driven sprocket's tension difference, plus the centrifugal tension; "
+                f"warned from "
                 f"{VIBRATION_RATIO:g} x): the stretch of its string modes, locked on the "
                 f"meshing, carries the rest. On an 08A 9/10 drive of 25 links at 600-1200 rpm "
                 f"level 2's span tensions summed to 1.5-5.8 x level 3's, whose own sum was "

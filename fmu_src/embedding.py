@@ -288,7 +288,10 @@ def _guard(method):
             # handle_py_exception, passed on by fmi2.cpp's logger with no arguments): a '%' in
             # a sentence ("5 % or more") is a printf conversion reading an argument that is not
             # there
-            exc.args = tuple(fmi_text(a) if isinstance(a, str) else a for a in exc.args)
+            try:
+                exc.args = tuple(fmi_text(a) if isinstance(a, str) else a for a in exc.args)
+            except Exception:  # an exception whose args cannot be set keeps them
+                pass
             raise
     return entry
 

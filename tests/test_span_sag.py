@@ -280,3 +280,18 @@ def test_levels_1_2_on_hanging_spans_are_warned():
     assert "hanging_spans" in codes[1] and "hanging_spans" in codes[2]
     flat = chainmodel.simulate("xu2010", fidelity=1, **dict(kw, drive_inclination=0.0))
     assert "hanging_spans" not in [p.code for p in flat.problems]
+
+
+@pytest.mark.parametrize("share", [1.9, 1.99, 2.01, 2.5])
+def test_the_hanging_floor_is_level3s_held_within_twice_the_weights(monkeypatch, share):
+    """Where level 3's statics at no pretension exceed twice the weight's floor F the floor is
+    2 F, not F (a review of this session's code): with the cubic's tension at 1.5 F, level 3
+    passing 2 F would otherwise drop the static tension from 2 F to 1.5 F (a jump in the
+    inclination, which moves level 3's statics)."""
+    from chainmodel.models import wrap_statics as W
+    sc = load_scene("xu2010", fidelity=0, **VERTICAL)
+    d, p = sc.drive, sc.parameters
+    floor = SG.hanging_tension(d, p)
+    monkeypatch.setattr(W, "_sagging", lambda *a: (1.5 * floor, 0.0, False))
+    monkeypatch.setattr(W, "sag_tension", lambda *a: share * floor)
+    assert W.weighted(d, p)[0] == pytest.approx(min(share, W.SAG_RATIO) * floor, rel=1e-12)

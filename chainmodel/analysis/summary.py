@@ -133,7 +133,7 @@ def summarise(result) -> dict:
         # tooth_ratio's other n/a: a driver that turns back within the window (a soft input
         # shaft ringing, a driven inertia pulling the chain round)
         w1 = result["driver.speed"][mask]
-        warnings.append(f"the driver sprocket turns back within the steady window from "
+        warnings.append(f"the driver sprocket stops or turns back within the steady window from "
                         f"{float(t[mask][0]):g} s (its speed between {float(np.min(w1)):.4g} "
                         f"and {float(np.max(w1)):.4g} rad/s about a mean of {mean_speed:.4g}): "
                         "the tooth ratio over whole driver tooth periods is not defined "

@@ -544,17 +544,19 @@ def weighted(drive: Drive, params: Mapping[str, Any], *,
 def _hanging(drive: Drive, params: Mapping[str, Any], exact: bool) -> float:
     """The static tension [N] a chain with no pretension carries on spans hanging along their
     length (a near-vertical drive): level 3's statics at no pretension where they find an
-    equilibrium within ``SAG_RATIO`` of the weight's own floor
+    equilibrium, held between the weight's own floor F
     (:func:`~chainmodel.models.span_sag.hanging_tension`, which leaves out the lower
-    sprocket's hanging wrap), else that floor. A floor under :func:`weighted`'s tension, not
-    a term of its cubic: a span taut along its whole length (pretension above it) takes the
-    ladder's tension; one that is not hangs and its lower end loops, its mean held by the
-    weight (no equilibrium of the ladder's stretch)."""
+    sprocket's hanging wrap) and ``SAG_RATIO`` F, else F. A floor under :func:`weighted`'s
+    tension, not a term of its cubic: a span taut along its whole length (pretension above
+    it) takes the ladder's tension; one that is not hangs and its lower end loops, its mean
+    held by the weight (no equilibrium of the ladder's stretch). :func:`weighted` asks for it
+    only where its tension is below SAG_RATIO F, so the clamp keeps the result continuous
+    where that starts (in the inclination, the pretension)."""
     floor = SG.hanging_tension(drive, params)
     if not exact:
         return floor
     t3 = sag_tension(drive, dict(params, **{"chain.pretension": 0.0}))
-    return t3 if t3 is not None and floor <= t3 <= SAG_RATIO * floor else floor
+    return floor if t3 is None else min(max(t3, floor), SAG_RATIO * floor)
 
 
 def _sagging(drive: Drive, params: Mapping[str, Any],

@@ -1,7 +1,7 @@
 """Level 2's spans locked on the meshing: the spans' mean tension sum (tight + slack, second
 half of a 0.6 s run) of levels 2 and 3 against a rigid chain's (twice the static tension, or
-the load's tension difference over a slack span at the weight's floor, plus both spans'
-centrifugal tension: chainmodel.validity, "span vibration"), on the trade study's scenes and on
+the driven sprocket's tension difference, load and driven damping, over a slack span at the
+weight's floor, plus both spans' centrifugal tension: chainmodel.validity, "span vibration"), on the trade study's scenes and on
 an independent audit's 08A 9/10 drive of 25 links (docs/reduced_models.md, "Level 2's spans
 locked on the meshing"). A level-2 row marked * carries the span_vibration warning.
 
@@ -42,8 +42,9 @@ def main():
             sc = r.scene
         d, p = sc.drive, sc.parameters
         speed = sc.operating.speed
-        rigid = (max(2.0 * r.static_tension, abs(sc.operating.load_torque)
-                     / d.driven.pitch_radius + 2.0 * hanging_tension(d, p))
+        torque = sc.operating.load_torque + p["driven.damping"] * speed * d.tooth_ratio
+        rigid = (max(2.0 * r.static_tension, abs(torque) / d.driven.pitch_radius
+                     + 2.0 * hanging_tension(d, p))
                  + 2.0 * float(centrifugal_tension(d, p, speed)))
         mark = "*" if sums[(2, "warned")] else " "
         print(f"{label:18s} {kw['input_speed_rpm']:5g}  {rigid:9.1f}  {sums[2]:8.1f} "
