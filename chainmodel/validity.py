@@ -698,7 +698,9 @@ class Monitor:
                            p["driven.damping"], 1.0 / d.driven.pitch_radius,
                            2.0 * float(centrifugal_tension(d, p, 1.0)))
         static2, hang2, damping, inv_r, centrifugal2 = self._rigid
-        held = np.maximum(static2, np.abs(load + damping * driven_speed) * inv_r + hang2)
+        held = abs(load + damping * driven_speed) * inv_r + hang2
+        # builtins for one sample (the FMU's every step: numpy's ufuncs on floats cost ~1 us)
+        held = np.maximum(static2, held) if isinstance(held, np.ndarray) else max(static2, held)
         return held + centrifugal2 * driver_speed * driver_speed
 
     def _span_modes(self, speed, slack):
