@@ -467,10 +467,10 @@ class Monitor:
                          if self._losses is not None and names is not None
                          and all(n in names for n in LOSS_OUTPUTS) else None)
         # levels 0-1's span-modes check reads the slack span, level 2's the tight one too
-        need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
-        self._span_ix = (tuple(names.index(n) for n in need)
+        self._span_need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
+        self._span_ix = (tuple(names.index(n) for n in self._span_need)
                          if self.level <= 2 and names is not None
-                         and all(n in names for n in need) else None)
+                         and all(n in names for n in self._span_need) else None)
         self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
         self._vibration = None      # level 2: (span tension sum, rigid chain's sum) that fired
         # the span-vibration check needs the breaking load for its floor (VIBRATION_FLOOR):
@@ -611,16 +611,16 @@ class Monitor:
                 s.t_reversal = float(t[np.argmax(rev)])
             s.reversal = min(s.reversal, float(np.min(along[rev])))
         k = np.floor((phi1 - phi0) / self.period)
-        # levels 0-1's span-modes check reads the slack span, level 2's the tight one too
-        need = SPAN_OUTPUTS if self.level == 2 else SPAN_OUTPUTS[:2]
-        if self.level <= 2 and all(n in outputs for n in need):
+        if self.level <= 2 and all(n in outputs for n in self._span_need):
             speed = np.asarray(outputs["driver.speed"], float)
+            vibration = self.level == 2         # the tight span and the rigid chain's sum too
             self._span_arrays(phi1, k, np.asarray(outputs["slack_span.tension"], float),
                               np.abs(speed),
-                              np.asarray(outputs.get("tight_span.tension", 0.0 * t), float),
+                              np.asarray(outputs["tight_span.tension"], float) if vibration
+                              else None,
                               self.rigid_sum(speed, w2, np.broadcast_to(
                                   np.asarray(load_torque, float), t.shape))
-                              if self.level == 2 else None)
+                              if vibration else None)
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
                             float(t[0]))
