@@ -81,8 +81,11 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7 x (docs/reduced_models.md, "Level 2's
   spans locked on the meshing").
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
-  direction (by more than REVERSAL_SPEED) once the driver has turned one tooth (the release of
-  level 3's initial layout is over by then). A warning: a torsional vibration larger than the
+  direction (by more than REVERSAL_SPEED) under forward drive: once the driver has turned one
+  tooth in the input's present direction (the release of level 3's initial layout is over by
+  then) and while the input runs at FORWARD_SHARE of its largest speed in that direction or
+  more (through a commanded reversal or stop the driven sprocket's lag or lead turns it
+  "backwards" at speeds near zero). A warning: a torsional vibration larger than the
   mean speed is physics a model may hold (a sudden start rings it), but it is resonance or slack
   chain, and the means mix both directions.
 """
@@ -107,6 +110,11 @@ __all__ = ["Problem", "chain_play", "geometry_problems", "breaking_load",
 
 #: a driven speed against the input's direction by more than this [rad/s] is a reversal
 REVERSAL_SPEED = 1e-3
+#: forward drive: the input turning one way at this share of its largest speed in that
+#: direction or more (a commanded reversal or stop passes through speeds at which any
+#: torsional lag or lead of the driven sprocket turns it "backwards": not a vibration larger
+#: than the running speed)
+FORWARD_SHARE = 0.1
 
 OUTPUTS = ("driver.angle", "driven.speed", "transmission_error", "contact.max_force",
            "chain.max_link_tension", "chain.min_link_tension")
@@ -449,6 +457,10 @@ class Monitor:
         self.stats = _Stats()
         self._start = None          # (driver angle, transmission error) at the first sample
         self._last = None           # (driver angle, transmission error, time) of the last one
+        # the input's direction (+1, -1, 0 below REVERSAL_SPEED; 2 before the first sample),
+        # the driver angle where it took it and the largest |input speed| since: "forward
+        # drive" is one tooth turned in one direction at FORWARD_SHARE of that speed or more
+        self._dir = (2, 0.0, 0.0)
         self._reported: set[str] = set()
         self._index = ({n: names.index(n) for n in OUTPUTS} if names is not None
                        and all(n in names for n in OUTPUTS) else None)
@@ -524,6 +536,30 @@ class Monitor:
                 new.append(p.text)
         return new
 
+    def _directions(self, w_in, phi1):
+        """:meth:`_sample`'s forward drive over whole arrays: per sample the input's direction
+        (0 where it is not forward drive: below REVERSAL_SPEED or FORWARD_SHARE of its
+        direction's largest speed so far) and the driver angle where that direction began
+        (carried across calls)."""
+        sign = np.where(w_in >= REVERSAL_SPEED, 1, np.where(w_in <= -REVERSAL_SPEED, -1, 0))
+        n = len(sign)
+        changed = np.empty(n, bool)
+        changed[0] = sign[0] != self._dir[0]
+        changed[1:] = sign[1:] != sign[:-1]
+        starts = np.flatnonzero(changed)
+        last = np.maximum.accumulate(np.where(changed, np.arange(n), -1))
+        since = np.where(last >= 0, phi1[np.maximum(last, 0)], self._dir[1])
+        # the largest |input speed| within each run of one direction (a run continued from the
+        # last call starts from its peak)
+        peak = np.abs(w_in)
+        bounds = [0, *starts[starts > 0], n]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            carried = self._dir[2] if a == 0 and not changed[0] else 0.0
+            peak[a:b] = np.maximum.accumulate(np.maximum(peak[a:b], carried))
+        self._dir = (int(sign[-1]), float(since[-1]), float(peak[-1]))
+        forward = np.where(np.abs(w_in) >= FORWARD_SHARE * peak, sign, 0)
+        return forward, since
+
     def _sample(self, t, phi1, w2, te, fc, tmax, tmin, w_in):
         s = self.stats
         if fc > s.max_contact:
@@ -535,7 +571,13 @@ class Monitor:
         if self._start is None:
             self._start = (phi1, te)
         phi0, te0 = self._start
-        if abs(w_in) >= REVERSAL_SPEED and abs(phi1 - phi0) >= self.period:
+        sign = 1 if w_in >= REVERSAL_SPEED else (-1 if w_in <= -REVERSAL_SPEED else 0)
+        if sign != self._dir[0]:
+            self._dir = (sign, phi1, abs(w_in))
+        elif abs(w_in) > self._dir[2]:
+            self._dir = (sign, self._dir[1], abs(w_in))
+        if (sign and abs(phi1 - self._dir[1]) >= self.period
+                and abs(w_in) >= FORWARD_SHARE * self._dir[2]):
             s.driven_samples += 1
             along = w2 if w_in > 0 else -w2
             if along < -REVERSAL_SPEED:
@@ -601,7 +643,8 @@ class Monitor:
         if self._start is None:
             self._start = (float(phi1[0]), float(te[0]))
         phi0, te0 = self._start
-        driven = (np.abs(w_in) >= REVERSAL_SPEED) & (np.abs(phi1 - phi0) >= self.period)
+        sign, since = self._directions(np.asarray(w_in, float), phi1)
+        driven = (sign != 0) & (np.abs(phi1 - since) >= self.period)
         along = np.where(w_in > 0, w2, -w2)
         rev = driven & (along < -REVERSAL_SPEED)
         s.driven_samples += int(driven.sum())

@@ -407,6 +407,53 @@ def test_reversal_counts_once_the_driver_has_turned_a_tooth():
     assert _check(back_late) == {"driven_reversal"}
 
 
+def _reversing(blip=None, lag=2e-3):
+    """A commanded reversal: the input speed runs +W, then -W through a 0.06 s linear ramp, the
+    driven sprocket follows at the tooth ratio ``lag`` behind (its elastic lag; negative: a lead,
+    as a torsional swing gives), so right at the zero crossing it turns the other way; ``blip``: a time window in which it turns back
+    against the (new) direction by 5 rad/s. Returns t, outputs, input speed."""
+    W, ratio = 4 * math.pi, 17 / 25
+    t = np.linspace(0.0, 0.3, 3001)
+    def w(x):
+        return np.clip(W - 2 * W * (x - 0.1) / 0.06, -W, W)
+    w_in = w(t)
+    phi1 = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
+    w2 = ratio * w(t - lag)
+    if blip is not None:
+        w2 = np.where((t > blip[0]) & (t < blip[1]), 5.0, w2)
+    zero = np.zeros_like(t)
+    out = {"driver.angle": phi1, "transmission_error": zero, "driven.speed": w2,
+           "contact.max_force": zero + 100.0, "chain.max_link_tension": zero + 100.0,
+           "chain.min_link_tension": zero}
+    return t, out, w_in
+
+
+def test_a_commanded_reversal_is_no_reversal_under_forward_drive():
+    """"Under forward drive" is one driver tooth turned in the input's present direction: a
+    driven sprocket lagging through the input's own reversal is not warned, one turning back
+    once the input has run a tooth the new way is, the same sample by sample (the FMU's path)
+    as over the whole run."""
+    sc = load_scene("xu2010")
+    for blip, lag, expected in ((None, 2e-3, set()), (None, -2e-3, set()),
+                                ((0.25, 0.252), 2e-3, {"driven_reversal"})):
+        t, out, w_in = _reversing(blip, lag)
+        assert codes(output_problems(sc.drive, sc.parameters, 3, t, out, w_in)) == expected
+        names = list(out)
+        monitor = Monitor(sc.drive, sc.parameters, 3, names)
+        found = set()
+        for i in range(len(t)):
+            row = np.array([out[n][i] for n in names])
+            for text in monitor.update(float(t[i]), row, float(w_in[i]), 1.0):
+                found.add(text)
+        assert bool(found) == bool(expected), found
+    # the premise: at the zero crossing the lagging (leading) driven speed opposes the input's
+    # sign after (before) it
+    t, out, w_in = _reversing()
+    assert np.any((w_in < -1e-3) & (out["driven.speed"] > 1e-3))
+    t, out, w_in = _reversing(lag=-2e-3)
+    assert np.any((w_in > 1e-3) & (out["driven.speed"] < -1e-3))
+
+
 def test_force_thresholds():
     t, out = _signals()
     out["chain.max_link_tension"] = np.full_like(t, 1.01 * ISO_10B)
