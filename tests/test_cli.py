@@ -69,6 +69,32 @@ KINEMATICS_KEYS = {"seating", "release", "theta4", "theta2", "theta3", "span_len
                    "velocity_ratio", "driven_acceleration"}
 
 
+@pytest.mark.parametrize("load", [10.0, -10.0])
+def test_the_summary_says_when_the_load_drives_the_chain(capsys, load):
+    """An overrunning load (the load torque with the rotation: here -10 N.m at +300 rpm) sends
+    power back into the input shaft, -|load| z1/z2 omega_in by the torque balance; the summary
+    gives that power and the run's table says so in words. Driving the load it says nothing."""
+    args = ("run", "xu2010", "--fidelity", 0, "--duration", 0.32, "--speed-rpm", 300,
+            "--load-torque", load, "--output-interval", 2e-4, "--set", "ramp_time=0.02")
+    data = run_json(capsys, *args)
+    balance = load * 25 / 17 * 300 * math.pi / 30           # W into the input shaft
+    assert data["mean_input_power_w"] == pytest.approx(balance, rel=5e-3)
+    code, out, err = run_cli(capsys, *args)
+    assert code == 0
+    assert ("power flows back into the input shaft" in out) == (load < 0)
+
+
+def test_a_run_that_ends_inside_the_speed_ramp_says_so(capsys):
+    """Durations shorter than the speed ramp (0.05 s by default) never reach the operating
+    speed: the warnings say so and name the ramp, whatever the level."""
+    data = run_json(capsys, "run", "xu2010", "--fidelity", 0, "--duration", 0.03,
+                    "--output-interval", 1e-4)
+    assert any("inside the input's speed ramp of 0.05 s" in w for w in data["warnings"])
+    data = run_json(capsys, "run", "xu2010", "--fidelity", 0, "--duration", 0.3,
+                    "--output-interval", 1e-4)
+    assert not any("speed ramp" in w for w in data["warnings"])
+
+
 @pytest.mark.parametrize("name", ["coarse", "medium", "fine", "C1"])
 def test_kinematics_json_matches_the_library(capsys, name):
     k = 240

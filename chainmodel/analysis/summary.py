@@ -113,7 +113,9 @@ def summarise(result) -> dict:
         warnings.append(f"the output interval {dt:g} s cannot resolve the meshing frequency "
                         f"{mesh:.4g} Hz (it needs less than {0.5 / mesh:.3g} s, two samples per "
                         "tooth period): the dominant frequency would be an alias and is not "
-                        "reported, and the peaks miss the tooth-periodic ripple")
+                        "reported, the peaks miss the tooth-periodic ripple, and the means are "
+                        "taken at few phases of the tooth period (at one sample per period, at "
+                        "one phase: biased by up to the ripple)")
         freq = math.nan
     turned = abs(float(phi1[-1] - phi1[0])) if phi1.size else 0.0
     if scene.operating.speed == 0.0:
@@ -139,8 +141,17 @@ def summarise(result) -> dict:
                         "the tooth ratio over whole driver tooth periods is not defined "
                         "(reported as n/a); the driver's vibration about its mean speed is "
                         "what to look at (input_shaft.stiffness, the driven inertia)")
+    ramp = scene.operating.ramp_time
+    if scene.operating.speed != 0.0 and float(t[-1]) < ramp:
+        warnings.append(f"the run ends at {float(t[-1]):g} s, inside the input's speed ramp of "
+                        f"{ramp:g} s: the drive never reached its operating speed, and every "
+                        f"figure is of the start; run for at least {ramp + 0.5:g} s (or set a "
+                        "shorter ramp_time)")
     found = getattr(result, "problems", [])
     warnings += [p.text for p in found]
+    # power into the input shaft: negative where the load drives the chain (an overrunning
+    # load, or reverse drive with the load's sign)
+    input_power = float(np.mean(result["input_shaft.torque"][mask] * result["driver.speed"][mask]))
     out = {
         "scene": scene.name,
         "fidelity": result.fidelity_name,
@@ -159,6 +170,7 @@ def summarise(result) -> dict:
         "min_link_tension_n": float(np.min(result["chain.min_link_tension"][mask])),
         "slack_link_time_fraction": float(np.mean(result["chain.min_link_tension"][mask] <= 0.0)),
         "mean_input_torque_nm": float(np.mean(result["input_shaft.torque"][mask])),
+        "mean_input_power_w": input_power,
         "tooth_ratio": tooth_ratio(phi1, phi2, drive.n_driver),
         "exact_tooth_ratio": drive.n_driver / drive.n_driven,
         "mean_driven_speed_rad_s": float(np.mean(result["driven.speed"][mask])),

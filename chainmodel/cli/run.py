@@ -184,7 +184,10 @@ def _run_table(s: Mapping[str, Any], scene) -> str:
                        f"min {g(s['min_slack_tension_n'])} N"),
         ("weakest link", f"min {g(s['min_link_tension_n'])} N; a link slack "
                          f"{100 * s['slack_link_time_fraction']:.3g} % of the time"),
-        ("input torque", f"mean {g(s['mean_input_torque_nm'])} N.m"),
+        ("input torque", f"mean {g(s['mean_input_torque_nm'])} N.m"
+                         + ("; power flows back into the input shaft "
+                            f"({g(-s['mean_input_power_w'])} W): an overrunning load drives "
+                            "the chain" if s['mean_input_power_w'] < 0 else "")),
         ("tooth ratio", f"{g(ratio, 10)}  (exact {drive.n_driver}/{drive.n_driven} = "
                         f"{exact:.10g}{err})"),
         ("dominant freq.", f"{g(s['dominant_frequency_hz'])} Hz of the driven speed  (meshing "
