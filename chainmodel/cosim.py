@@ -219,6 +219,9 @@ class CosimSession:
         #: input's acceleration; level 0 and input_shaft.rigid), the motor model carries it
         self.include_drive_inertia = True
         self.watch = CouplingWatch()
+        #: torque causality: (motor.torque, rotor speed) at the last communication points, for
+        #: the coupling message's estimate of the motor model's dT/domega
+        self._motor_points: deque = deque(maxlen=2)
         #: False: no coupling watch (inputs prescribed open loop; the FMU's coupling.watch)
         self.watch_coupling = True
         #: whole turns between the master's angle count and the model's at the last step (a
@@ -228,6 +231,10 @@ class CosimSession:
         #: below the refusal's tolerance is followed as imposed; the FMU warns of one above
         #: :data:`NOTED_JUMP`
         self.jump_noted = (0.0, 0.0)
+        #: (the largest miss of the first-order hold itself [rad], its time, the step, the
+        #: speed change over it): an accelerating input's angle runs ahead of (or behind) the
+        #: held speed by about a h^2 / 2 each step, and the shaft spring takes that at once
+        self.hold_noted = (0.0, 0.0, 0.0, 0.0)
         self._torque_inputs = False
 
     # --- inputs --------------------------------------------------------------------------------
@@ -277,6 +284,9 @@ class CosimSession:
         if abs(d) <= tol:
             if abs(d) - hold > self.jump_noted[0]:
                 self.jump_noted = (abs(d) - hold, st.t)
+            miss = min(abs(d), hold)
+            if miss > self.hold_noted[0]:
+                self.hold_noted = (miss, st.t, st.t - self.prev_t, self.speed - held_speed)
             return angle
         raise ValueError(
             f"input input_shaft.angle = {angle:.9g} rad at t = {st.t:.9g} s is {d:+.6g} rad "
@@ -314,6 +324,23 @@ class CosimSession:
                 f"followed as imposed): {what}; set input_shaft.angle to the integral of "
                 "input_shaft.speed (docs/fmu.md, \"The angle input\")")
 
+    def hold_warning(self) -> str | None:
+        """The sentence for the largest miss of the first-order hold when it exceeds
+        :data:`NOTED_JUMP` (an input accelerating over coarse communication steps), else None."""
+        miss, when, h, dw = self.hold_noted
+        if not (miss > NOTED_JUMP and h > 0 and dw != 0):
+            return None
+        a = abs(dw) / h
+        what = (f"the input-shaft spring took it at once, "
+                f"{self.params['input_shaft.stiffness'] * miss:.3g} N.m"
+                if self._has_shaft_spring() else "the driver moved by it at once")
+        return (f"input_shaft.angle at t = {when:.9g} s was {miss:.3g} rad from where the held "
+                f"input carried it: the input shaft accelerated (about {a:.3g} rad/s2 over the "
+                f"communication step of {h:.3g} s) and this FMU holds its speed over a step "
+                f"(first-order hold; the miss is about a h^2 / 2); {what}. Steps up to "
+                f"{math.sqrt(2.0 * NOTED_JUMP / a):.2g} s keep the miss below "
+                f"{NOTED_JUMP:g} rad at that acceleration (docs/fmu.md, \"Input hold\")")
+
     def acceleration(self, t: float) -> float:
         """Backward difference of the speed input between communication points,
         a_k = (w_k - w_(k-1)) / (t_k - t_(k-1)); 0 at the first point (no history)."""
@@ -348,10 +375,16 @@ class CosimSession:
         stepper = self._I.make_stepper(model, params["solver.method"], t, raw,
                                        step=params["solver.step"], rtol=params["solver.rtol"],
                                        tolerance=params["solver.tolerance"], x0=x0)
+        # in torque causality the master feeds motor.torque back, not the shaft's speed
+        watched = (("motor.torque", "load.torque") if params["input_shaft.causality"] == "torque"
+                   else CouplingWatch().names)
+        if self.watch.names != watched:
+            self.watch = CouplingWatch(watched)
         if state is not None:
             stepper.set_state(state)
         else:
             self.watch.reset()
+            self._motor_points.clear()
         self.stepper, self.params, self.drive = stepper, params, drive
         self._torque_inputs = params["input_shaft.causality"] == "torque"   # (torque_causal)
         return Built(stepper, params, drive, level)
@@ -391,7 +424,13 @@ class CosimSession:
         st = self.stepper
         # the watch takes the inputs of this point even when the step then fails: a master
         # retrying the point with the same inputs adds a zero increment, which it skips
-        growing = self.watch.update((self.speed, self.torque)) if self.watch_coupling else None
+        growing = None
+        if self.watch_coupling:
+            if self._torque_inputs:
+                self._motor_points.append((self.motor_torque, self.motor_values()[1]))
+                growing = self.watch.update((self.motor_torque, self.torque))
+            else:
+                growing = self.watch.update((self.speed, self.torque))
         if growing is not None:
             raise CouplingUnstable(self.coupling_message(t, h, growing))
         t_to = t + h if t_end is None else t_end
@@ -439,6 +478,8 @@ class CosimSession:
             text += ", ".join(f"{stable_step(j, p):.3g} s for J = {j:g} kg.m2" for j in js)
             text += "; use such a step or torque causality (the motor's torque in, the rotor "
             text += "integrated inside this FMU). "
+        elif name == "motor.torque":
+            text += self._motor_torque_advice()
         elif name == "input_shaft.speed":
             text += ("Here the input-shaft torque contains the drive's inertia times the "
                      "backward-difference acceleration of the speed input, a feedthrough of "
@@ -452,6 +493,26 @@ class CosimSession:
                        "nothing back (the inputs are prescribed and really oscillate so), set "
                        "coupling.watch = false.")
 
+    def _motor_torque_advice(self) -> str:
+        """Torque causality: a motor model whose torque falls with the rotor speed it is fed
+        (speed controller, a DC motor's back-EMF: dT/domega = -c) drives the rotor explicitly,
+        omega_k+1 = omega_k + h / J (T0 - c omega_k): stable only for h < 2 J / c."""
+        J = self.params["motor.inertia"]
+        text = ("The motor model's torque depends on motor.speed, which this FMU returns and "
+                "the master holds over the step (a speed controller, or a DC motor's back-EMF): "
+                f"the rotor (motor.inertia J = {J:g} kg.m2) is then integrated explicitly and "
+                "holds only at steps below about 2 J / |dT/domega|")
+        if len(self._motor_points) == 2:
+            (t0, w0), (t1, w1) = self._motor_points
+        else:
+            t0 = t1 = w0 = w1 = 0.0
+        if w1 != w0 and (t1 - t0) * (w1 - w0) < 0:   # a torque that falls with the speed
+            slope = (t1 - t0) / (w1 - w0)
+            text += (f"; from the last two steps dT/domega = {slope:.3g} N.m.s/rad, so h < "
+                     f"{2.0 * J / abs(slope):.3g} s")
+        return text + ("; use such a step, or angle causality with the motor model integrating "
+                       "its rotor. ")
+
     # --- state ---------------------------------------------------------------------------------
     def get_state(self) -> dict:
         """JSON-serialisable state (exact float round trip)."""
@@ -463,7 +524,8 @@ class CosimSession:
                  "inputs": [u.angle, u.speed, u.torque, u.acceleration, u.motor_torque],
                  "extra": dict(ss.extra)}
         return {"stepper": s, "prev_t": self.prev_t, "prev_speed": self.prev_speed,
-                "watch": self.watch.state()}
+                "watch": self.watch.state(),
+                "motor_points": [list(p) for p in self._motor_points]}
 
     def stepper_state(self, s: Mapping):
         """A StepperState from :meth:`get_state`'s ``"stepper"`` entry."""
@@ -476,6 +538,7 @@ class CosimSession:
         self.prev_t, self.prev_speed = state["prev_t"], state["prev_speed"]
         if "watch" in state:
             self.watch.restore(state["watch"])
+        self._motor_points = deque((tuple(p) for p in state.get("motor_points", ())), maxlen=2)
         s = state["stepper"]
         if s is None:
             self.stepper = None

@@ -239,6 +239,7 @@ class ChainDrive(Fmi2Slave):
         self._told_coupling = False  # an unstable coupling was written to stderr
         self._told_turns = False     # a restart of the angle count was logged
         self._told_jump = False      # an accepted angle jump was warned of
+        self._told_hold = False      # the first-order hold's miss was warned of
         self._warned_outputs = False
 
     def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
@@ -372,7 +373,12 @@ class ChainDrive(Fmi2Slave):
                 outputs or None, accuracy)
             if choice.message != getattr(self, "_auto_message", None):
                 self._auto_message = choice.message
-                self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
+                # a target no measured configuration meets, or an error it cannot promise, is
+                # what the user must hear: a warning, not a logAll note a tool may hide
+                if choice.met and choice.promised:
+                    self.log(_fmi_text(choice.message), Fmi2Status.ok, "logAll")
+                else:
+                    self.log(_fmi_text(choice.message), Fmi2Status.warning)
         J_vr, inertia_vr, watch_vr = self._coupling_vrs
         session.motor_inertia = self._real[J_vr]
         if not (session.motor_inertia >= 0 and math.isfinite(session.motor_inertia)):
@@ -500,6 +506,11 @@ class ChainDrive(Fmi2Slave):
             note = session.jump_warning()
             if note:
                 self._told_jump = True
+                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.warning)
+        if not self._told_hold:
+            note = session.hold_warning()
+            if note:
+                self._told_hold = True
                 self.log(_fmi_text(note + " (logged once)"), Fmi2Status.warning)
         if session.torque_causal:   # the validity checks' input speed: the motor rotor's
             speed = session.motor_values()[1]
