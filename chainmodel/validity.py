@@ -218,6 +218,8 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
     length = _length_problems(drive, params)
     if level == 3 and length and length[0].code == "chain_too_long":
         length = [_level3_start(drive, params, length[0])]
+    if level == 1 and length and length[0].code == "chain_too_long":
+        length = [Problem("chain_too_long", f"{length[0].message}. {TOO_LONG_AT_LEVEL1}")]
     # the option is levels 0-2's: level 3 holds its own statics and says nothing of it
     wrap = [] if level == 3 else _wrap_statics_problems(drive, params, level)
     wrap += _hanging_problems(drive, params, level)
@@ -226,6 +228,15 @@ def geometry_problems(drive: Drive, params: Mapping[str, Any],
         return odd + [Problem(length[0].code,
                               f"{length[0].message}. Therefore {wrap[0].message}")]
     return odd + length + wrap
+
+
+#: what a chain too long does to level 1 (the twenty-fourth session's audit; level 2 refuses
+#: such a chain, its strings need both spans taut at rest)
+TOO_LONG_AT_LEVEL1 = (
+    "Level 1's spans are elastic catenaries of a taut span; on a chain hanging this deep their "
+    "running tensions are not the hanging chain's and may swing far from its sag tension (a "
+    "12B 19/19 drive 2.1 pitches too long, no load, 2 rpm: level 1 0-55 N where the sag holds "
+    "14 N, which levels 0 and 3 keep within 0.3 N): take span tensions from level 0 or 3")
 
 
 #: a chain value this many times above or below the nearest ISO 606 chain's of the drive's

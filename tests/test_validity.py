@@ -454,6 +454,42 @@ def test_a_commanded_reversal_is_no_reversal_under_forward_drive():
     assert np.any((w_in > 1e-3) & (out["driven.speed"] < -1e-3))
 
 
+_HANGING_12B = """name = "hanging 12B"
+chain = "12B"
+[parameters]
+"drive.driver_teeth" = 19
+"drive.driven_teeth" = 19
+"drive.links" = 100
+"drive.centre_distance" = 0.0
+"""
+
+
+def test_a_chain_too_long_tells_level1_its_span_tensions_are_not_the_hanging_chains(tmp_path):
+    """A 12B 19/19 chain of 100 links on a centre distance 20 mm short of taut hangs about two
+    pitches deep. Level 1's taut-span law then swings far off the sag tension that level 0
+    holds (the premise, measured here: a range over twice the static tension against level 0's
+    within 5 % of it); its chain-too-long warning says so and points to levels 0 and 3, level
+    0's does not."""
+    path = tmp_path / "hanging.toml"
+    path.write_text(_HANGING_12B)
+    sc = load_scene(str(path))
+    a = sc.drive.centre_distance - 0.020
+    runs = {L: chainmodel.simulate(sc, fidelity=L, duration=4.0, output_interval=1e-3,
+                                   input_speed_rpm=2, load_torque=0.0,
+                                   parameters={"drive.centre_distance": a}) for L in (0, 1)}
+    for L, r in runs.items():
+        x = r["tight_span.tension"][r.time >= 2.0]
+        too_long = [w for w in r.warnings if w.startswith("the chain is too long")]
+        assert len(too_long) == 1
+        if L == 0:
+            assert np.ptp(x) < 0.05 * r.static_tension
+            assert "Level 1's spans" not in too_long[0]
+        else:
+            assert np.ptp(x) > 2 * r.static_tension
+            assert "Level 1's spans are elastic catenaries" in too_long[0]
+            assert "take span tensions from level 0 or 3" in too_long[0]
+
+
 def test_force_thresholds():
     t, out = _signals()
     out["chain.max_link_tension"] = np.full_like(t, 1.01 * ISO_10B)
