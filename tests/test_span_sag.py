@@ -157,14 +157,14 @@ def test_level1_span_law_covers_the_parabolas_arc(delta_mm):
     chord = links * p_free + 1e-3 * delta_mm
     sag = wn * wn * chord ** 3 / 24.0
     k_eff = 1.0 / (links / k_link + seat_c)
-    t, _ = spans._tension(chord, 0.0, 0.0, links, p_free, k_eff, 0.0, 0.0, 0.0, 0.0, sag)
+    t, _ = spans._tension(chord, 0.0, 0.0, links * p_free, k_eff, 0.0, 0.0, 0.0, 0.0, sag)
     chain = links * p_free + t / k_eff
     # the shallow parabola is Irvine's first order: the arc's next term is -(12/5)(d/L)^2 of it
     ratio = wn * chord / (8.0 * t)
     assert _arc_excess(wn, chord, t) == pytest.approx(chain - chord,
                                                       rel=1e-3 + 3.0 * ratio * ratio)
     # without weight: the linear law, slack below zero stretch
-    t0, _ = spans._tension(chord, 0.0, 0.0, links, p_free, k_eff, 0.0, 0.0, 0.0)
+    t0, _ = spans._tension(chord, 0.0, 0.0, links * p_free, k_eff, 0.0, 0.0, 0.0)
     assert t0 == pytest.approx(max(0.0, k_eff * 1e-3 * delta_mm), abs=1e-9)
     assert t > t0
 

@@ -244,8 +244,12 @@ def test_slack_switch_is_located_as_an_event():
 
 
 def test_adaptive_with_events_agrees_with_fine_fixed_step():
+    """dop853 stopping at the events against RK4 at 20 us steps (itself converged to 1e-10 rad:
+    10 and 5 us give the same driven angle). rtol 3e-11: at 1e-10 dop853's own error on this
+    run is 1.3e-9 rad since the span's free length counts the tooth-period-mean links' pre-strain
+    (kernels.spans.free_length; the law then has a kink at each event where it had a step)."""
     m, x0, load = _slack_setup()
-    ad = Adaptive(m, 0.0, x0, load, method="dop853", rtol=1e-10)
+    ad = Adaptive(m, 0.0, x0, load, method="dop853", rtol=3e-11)
     fine = RK4(m, 0.0, x0, load, step=2e-5)
     a_out = ad.advance(0.05, load)
     f_out = fine.advance(0.05, load)
@@ -442,7 +446,9 @@ def test_automatic_step_is_capped_at_a_quarter_tooth_period_of_the_current_input
     r = chainmodel.simulate(sc)
     ref = chainmodel.simulate(sc.with_overrides(solver_step=quarter / 8))
     late = r.time >= 0.25
-    assert np.max(np.abs(r["driven.angle"][late] - ref["driven.angle"][late])) < 1e-4
+    # 1.28e-4 rad measured since the span's free length counts the mean links' pre-strain
+    # (kernels.spans.free_length, twenty-fourth session), 1e-4 before
+    assert np.max(np.abs(r["driven.angle"][late] - ref["driven.angle"][late])) < 1.5e-4
     # an explicit solver.step is the user's choice and is kept
     assert sc.with_overrides(solver_step=2 * quarter).stepper().h == pytest.approx(2 * quarter)
 

@@ -426,22 +426,45 @@ def span_stiffness(links_compliance, k_link, c_link, seat_c):
 
 
 @jit_noalloc
-def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
+def free_length(links, nbar, pitch, p_free):
+    """The free length of the chain in a span of ``links`` links (its current count), whose
+    stretch delta = l - free_length - f the span law takes up.
+
+    With the span's stiffness from its own count (``nbar`` 0) that is n p_free: at a seating or
+    release the chord l changes by a pitch, the free length by p_free and k_link / n by a link,
+    so the tension is continuous where each link carries the pretension T_pre =
+    chain.pretension (at rest) and jumps by the rest, (T - T_pre) / (n - 1), under load. With
+    the tooth-period-mean count n_bar (torsional.mean_link_compliance: a seating roller's link
+    keeps its elongation on the sprocket) the free length is n p - n_bar (p - p_free): the
+    stretch is continuous through every event. With n p_free there it jumped by p - p_free at
+    every event, a tension step of T_pre / n_bar at the meshing frequency (the 16B mixer at a
+    20 kN static tension: 721 N; at its own 1200 N, 79 N), which pumped a driver oscillation
+    4.7 times level 3's and made the chain return 3.4 W more than it took in (the
+    twenty-fourth session's audit; docs/reduced_models.md). The tooth-period means are the
+    same either way."""
+    if nbar > 0.0:
+        return links * pitch - nbar * (pitch - p_free)
+    return links * p_free
+
+
+@jit_noalloc
+def _tension(length, stretch_modal, stretch_rate, free, k_eff, c_n,
              seat_slack, length_rate, soft=0.0, sag=0.0, sag_root=0.0):
     """Span tension from its stretch (a span cannot push) and the switching function whose sign
     change marks the switch: min(k delta, T_raw), continuous through both ways of going slack.
 
-    The stretch uses the span's current link count ``links``; its stiffness k_eff and damping
-    c_n (:func:`span_stiffness`) use the same count, or the tooth-period mean (torsional.
-    mean_link_compliance): a seating roller's link keeps its elongation on the sprocket, so the
-    span does not stiffen by a whole link at the event and the tension stays continuous.
+    The stretch is the span's chord beyond the free length of the chain in it (``free``,
+    :func:`free_length`); its stiffness k_eff and damping c_n (:func:`span_stiffness`) use the
+    span's current count, or the tooth-period mean (torsional.mean_link_compliance): a seating
+    roller's link keeps its elongation on the sprocket, so the span does not stiffen by a whole
+    link at the event and the tension stays continuous.
 
     ``sag`` > 0 (level 1's straight spans under their weight, S = w_n^2 L^3 / 24): the span's
     chord is shorter than the chain in it by its quasi-static sag S / T^2, so
     T^3 - T_raw T^2 - S k_eff = 0 (:func:`_sagging`; ``sag_root`` its (S k_eff)^(1/3) where
     the caller has it): a span whose stretch runs out hangs on its sag tension instead of going
     slack (docs/reduced_models.md, "One static tension")."""
-    delta = length + stretch_modal - links * p_free - seat_slack
+    delta = length + stretch_modal - free - seat_slack
     raw = k_eff * delta + c_n * (length_rate + stretch_rate)
     switch = min(k_eff * delta, raw)
     if sag > 0.0:
@@ -455,13 +478,13 @@ def _tension(length, stretch_modal, stretch_rate, links, p_free, k_eff, c_n,
 
 
 @jit_noalloc
-def _tension_lagged(length, links, p_free, k_eff, c_n, seat_slack, length_rate, lagged,
+def _tension_lagged(length, free, k_eff, c_n, seat_slack, length_rate, lagged,
                     quasi_static, floor, sag, sag_root, rho, lbar, share):
     """:func:`_tension` with level 1's lagged sag (:func:`_lagged`): (T, switch, the sag's
     tension T_q, dT_q/dt, lag rate). Without a floor the switch min(k delta, T_raw) + the
     sag's offset changes sign where the span goes slack (the law's kink); under a floor the
     law has no kink and the switch is the tension itself, never zero (no event to locate)."""
-    delta = length - links * p_free - seat_slack
+    delta = length - free - seat_slack
     elastic = k_eff * delta
     raw = elastic + c_n * length_rate
     ks = sag * k_eff
@@ -571,24 +594,26 @@ def _evaluate(x, th_in, w_in, a_in, load, G, P, dx, aux, full):
         ke_l, cn_l = P[P_KEFF_L], P[P_CN_L]
     else:
         ke_l, cn_l = span_stiffness(nl, P[P_K_LINK], P[P_C_LINK], P[P_SEAT_C])
+    free_u = free_length(nu, P[P_NBAR_U], P[P_PITCH], p_free)
+    free_l = free_length(nl, P[P_NBAR_L], P[P_PITCH], p_free)
     if P[P_LAG] > 0.5:
         # level 1's lagged sag: states T_q,up, T_q,low after the sprockets' (and any modes')
         lag = lag_index(P)
         qs = P[P_LAG_QS] > 0.5
         rho = P[P_RHOA]
         t_u, g_u, q_u, dx[lag], w_u = _tension_lagged(
-            lu, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u, x[lag], qs, P[P_SOFT],
+            lu, free_u, ke_u, cn_u, P[P_SEAT_SLACK], rate_u, x[lag], qs, P[P_SOFT],
             P[P_SAG_U], P[P_SAGC_U], rho, P[P_LBAR_U], P[P_LAG_RATE])
         t_l, g_l, q_l, dx[lag + 1], w_l = _tension_lagged(
-            ll, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l, x[lag + 1], qs, P[P_SOFT],
+            ll, free_l, ke_l, cn_l, P[P_SEAT_SLACK], rate_l, x[lag + 1], qs, P[P_SOFT],
             P[P_SAG_L], P[P_SAGC_L], rho, P[P_LBAR_L], P[P_LAG_RATE])
         aux[A_LAG_UP] = q_u
         aux[A_LAG_LOW] = q_l
         aux[A_LAG_W] = w_u if w_u > w_l else w_l
     else:
-        t_u, g_u = _tension(lu, s_u, sr_u, nu, p_free, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
+        t_u, g_u = _tension(lu, s_u, sr_u, free_u, ke_u, cn_u, P[P_SEAT_SLACK], rate_u,
                             P[P_SOFT], P[P_SAG_U], P[P_SAGC_U])
-        t_l, g_l = _tension(ll, s_l, sr_l, nl, p_free, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
+        t_l, g_l = _tension(ll, s_l, sr_l, free_l, ke_l, cn_l, P[P_SEAT_SLACK], rate_l,
                             P[P_SOFT], P[P_SAG_L], P[P_SAGC_L])
         aux[A_LAG_UP] = 0.0
         aux[A_LAG_LOW] = 0.0

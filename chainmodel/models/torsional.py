@@ -17,7 +17,10 @@ release. Its tension comes from its stretch::
     T = k_eff (l - n p_free) + (c_link / n) dl/dt   if that and the stretch are positive, else 0
 
 with p_free = p - pretension / k_link the free link length and k_eff = k_link / n (links in
-series; with ``torsional.seat_compliance`` the seats' ladder compliance is added in series). A span
+series; with ``torsional.seat_compliance`` the seats' ladder compliance is added in series).
+With ``torsional.mean_link_compliance`` (the default) k_eff takes the tooth-period-mean count
+n_bar and the free length is n p - n_bar (p - p_free), so the stretch is continuous through the
+seating and release events (:func:`chainmodel.kernels.spans.free_length`). A span
 cannot push: at zero stretch or zero tension it goes slack (the outputs add the centrifugal
 tension rho A v^2 on top, docs/stability.md), and that switch is an event of the
 steppers (:meth:`TorsionalModel.switching_functions`), as are the seating and release events at
