@@ -310,15 +310,21 @@ class CosimSession:
                 f"at t = {t:.9g} s (whole turns from where its speed carried it): taken as a "
                 "restart, the drive's angles continue")
 
+    def _taken_at_once(self, angle: float) -> str:
+        """What an angle the drive takes at once costs: the shaft spring's torque, or (no
+        spring) the driver's move."""
+        if self._has_shaft_spring():
+            return (f"the input-shaft spring took it at once, "
+                    f"{self.params['input_shaft.stiffness'] * angle:.3g} N.m")
+        return "the driver moved by it at once"
+
     def jump_warning(self) -> str | None:
         """The sentence for the largest accepted angle jump when it exceeds
         :data:`NOTED_JUMP` beyond the hold's own miss, else None."""
         jump, when = self.jump_noted
         if not jump > NOTED_JUMP:
             return None
-        what = (f"the input-shaft spring took it at once, "
-                f"{self.params['input_shaft.stiffness'] * jump:.3g} N.m"
-                if self._has_shaft_spring() else "the driver moved by it at once")
+        what = self._taken_at_once(jump)
         return (f"input_shaft.angle jumped by {jump:.3g} rad beyond what input_shaft.speed "
                 f"explains at t = {when:.9g} s (below the half driver tooth that is refused, so "
                 f"followed as imposed): {what}; set input_shaft.angle to the integral of "
@@ -331,9 +337,7 @@ class CosimSession:
         if not (miss > NOTED_JUMP and h > 0 and dw != 0):
             return None
         a = abs(dw) / h
-        what = (f"the input-shaft spring took it at once, "
-                f"{self.params['input_shaft.stiffness'] * miss:.3g} N.m"
-                if self._has_shaft_spring() else "the driver moved by it at once")
+        what = self._taken_at_once(miss)
         return (f"input_shaft.angle at t = {when:.9g} s was {miss:.3g} rad from where the held "
                 f"input carried it: the input shaft accelerated (about {a:.3g} rad/s2 over the "
                 f"communication step of {h:.3g} s) and this FMU holds its speed over a step "
