@@ -29,7 +29,13 @@ BASE = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "A": {
 DISPLAY = {"mm": ("m", 1000.0), "deg": ("rad", 180.0 / math.pi),
            "rpm": ("rad/s", 60.0 / (2.0 * math.pi))}
 #: inputs and outputs shown in rpm by tools that honour displayUnit
-SPEED_DISPLAY = {"input_shaft.speed": "rpm", "driver.speed": "rpm", "driven.speed": "rpm"}
+SPEED_DISPLAY = {"input_shaft.speed": "rpm", "driver.speed": "rpm", "driven.speed": "rpm",
+                 "motor.speed": "rpm", "auto.input_speed": "rpm"}
+#: min / max of the adapter's own Real parameters (None: unbounded), as the adapter checks them:
+#: auto.accuracy in (0, 1] (fidelity_auto.validate_request), coupling.motor_inertia >= 0 (0:
+#: unknown). FMI's min is inclusive, so an open end at 0 is declared as 0, as for the library's
+#: parameters that must be positive; the adapter refuses 0 naming the range.
+ADAPTER_RANGES = {"auto.accuracy": (0.0, 1.0), "coupling.motor_inertia": (0.0, None)}
 CAPABILITIES = {"needsExecutionTool": "true",   # a Python with numpy and scipy
                 "canHandleVariableCommunicationStepSize": "true",
                 "canInterpolateInputs": "false", "maxOutputDerivativeOrder": "0",
@@ -169,6 +175,12 @@ def complete_model_description(xml: bytes, meta: dict) -> bytes:
                 typ.set("start", fmt(meta.get("defaults", {}).get(name, params[name].default)))
             elif typ.get("start") is not None:
                 typ.set("start", fmt(float(typ.get("start"))))
+        if name in ADAPTER_RANGES and typ.tag == "Real":
+            low, high = ADAPTER_RANGES[name]
+            if low is not None:
+                typ.set("min", fmt(low))
+            if high is not None:
+                typ.set("max", fmt(high))
         if name in params and typ.tag in ("Real", "Integer"):
             p = params[name]
             conv = fmt if typ.tag == "Real" else (lambda v: str(int(v)))
