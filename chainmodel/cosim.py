@@ -95,6 +95,12 @@ class CouplingUnstable(SimulationDiverged):
     """The master's coupling of this drive to the rest of the system is unstable."""
 
 
+#: the inputs a master feeds back, watched for an unstable coupling: in angle causality the
+#: shaft's speed, in torque causality the motor's torque; the load torque in both
+WATCHED_ANGLE = ("input_shaft.speed", "load.torque")
+WATCHED_TORQUE = ("motor.torque", "load.torque")
+
+
 class CouplingWatch:
     """Recognises an unstable explicit coupling in the inputs a master sets.
 
@@ -112,7 +118,7 @@ class CouplingWatch:
     GROWTH = 1.5
     PEAKS = 2 * CYCLES
 
-    def __init__(self, names=("input_shaft.speed", "load.torque"), floors=(1e-4, 1e-4)):
+    def __init__(self, names=WATCHED_ANGLE, floors=(1e-4, 1e-4)):
         self.names, self.floors = tuple(names), tuple(floors)
         self.reset()
 
@@ -379,9 +385,8 @@ class CosimSession:
         stepper = self._I.make_stepper(model, params["solver.method"], t, raw,
                                        step=params["solver.step"], rtol=params["solver.rtol"],
                                        tolerance=params["solver.tolerance"], x0=x0)
-        # in torque causality the master feeds motor.torque back, not the shaft's speed
-        watched = (("motor.torque", "load.torque") if params["input_shaft.causality"] == "torque"
-                   else CouplingWatch().names)
+        watched = (WATCHED_TORQUE if params["input_shaft.causality"] == "torque"
+                   else WATCHED_ANGLE)
         if self.watch.names != watched:
             self.watch = CouplingWatch(watched)
         if state is not None:
