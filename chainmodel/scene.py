@@ -319,6 +319,14 @@ def _search_pretension(level: int, drive: Drive, params: dict, target: float) ->
     return x  # pragma: no cover - regula falsi on a monotone function converges
 
 
+def _chain_first(message: str, drive: Drive, params: Mapping[str, Any]) -> str:
+    """``message`` of a refusal, with the chain values far from every ISO 606 chain of the
+    pitch named after it (a unit slip is then the likelier cause; docs/scenes.md rule 5)."""
+    from .validity import implausible_values
+    odd = [p.text for p in implausible_values(drive, params)]
+    return message + (f"; but check the chain first: {'; '.join(odd)}" if odd else "")
+
+
 _STATIC_NOTE = "for a static span tension of"
 _CHAIN_NOTE = "no chain named: ISO 606"
 _CHANGED_NOTE = "drive changed from"
@@ -359,7 +367,10 @@ class Scene:
             params = dict(self.parameters, **{"chain.pretension": 0.0})
             drive = self.drive_for(params)
             level = params["fidelity"]
-            pre = _solve_pretension(level, drive, tuple(sorted(params.items())), target)
+            try:
+                pre = _solve_pretension(level, drive, tuple(sorted(params.items())), target)
+            except ValueError as exc:
+                raise ValueError(_chain_first(str(exc), drive, params)) from None
             self.parameters = P.validate({"chain.pretension": pre}, self.parameters)
             self.notes = [n for n in self.notes if _STATIC_NOTE not in n] + [
                 f"chain.pretension = {pre:.6g} N {_STATIC_NOTE} {target:g} N at fidelity "
@@ -651,10 +662,9 @@ class Scene:
             return
         setting = ("input_speed_rpm" if "input_shaft.speed" in why else
                    "load_torque" if "load.torque" in why else "operating point")
-        odd = self.implausible_chain_values()
-        raise ValueError(f"scene setting {setting} refused at fidelity {model.level} "
-                         f"({model.name}): {why}"
-                         + (f"; but check the chain first: {'; '.join(odd)}" if odd else ""))
+        raise ValueError(_chain_first(f"scene setting {setting} refused at fidelity "
+                                      f"{model.level} ({model.name}): {why}",
+                                      self.drive, self.parameters))
 
     def implausible_chain_values(self) -> list[str]:
         """The chain values more than validity.IMPLAUSIBLE_RATIO times above or below the

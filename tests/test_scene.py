@@ -1,6 +1,7 @@
 """Scenes, the parameter schema and simulate(): construction, overrides, validation."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -263,6 +264,22 @@ def test_a_chain_value_far_from_its_iso_chain_is_questioned():
     for preset_name in preset_names():
         assert load_scene(preset_name).implausible_chain_values() == [], preset_name
 
+
+
+def test_a_static_tension_refusal_names_a_chain_value_far_from_its_chain():
+    """The twenty-fourth session's audit: a 16B link mass typed 100x too large makes the sag
+    alone exceed the mixer's 1200 N static tension, and the refusal spoke of the centre
+    distance only. It now names the mass too (docs/scenes.md rule 5: "in any refusal it
+    causes"). The 16B's own mass is the steel-volume law's (chainmodel.chains)."""
+    from chainmodel import chains
+    mass = 100 * chains.parameter_values("16B")["chain.link_mass"]
+    scene = load_scene(str(Path(__file__).resolve().parent.parent / "examples" / "scenes"
+                           / "16b_mixer.toml"))
+    with pytest.raises(ValueError, match=r"static_tension 1200 N is below .* but check the "
+                                         r"chain first: chain\.link_mass = .* is 100 x the "
+                                         r"value of the nearest ISO 606 chain of this pitch "
+                                         r"\(16B: "):
+        scene.with_overrides(parameters={"chain.link_mass": mass})
 
 def test_a_drive_changed_from_a_preset_drops_the_presets_notes_on_its_drive():
     """xu2010's note ("centre distance 197.7 mm as in the paper") is false for an 11/57 drive
