@@ -330,6 +330,7 @@ def _chain_first(message: str, drive: Drive, params: Mapping[str, Any]) -> str:
 _STATIC_NOTE = "for a static span tension of"
 _CHAIN_NOTE = "no chain named: ISO 606"
 _CHANGED_NOTE = "drive changed from"
+_ODD_NOTE = "drive.links is odd"
 
 
 @dataclass
@@ -356,6 +357,7 @@ class Scene:
     def __post_init__(self):
         self._apply_chain()
         self.parameters = P.validate(self.parameters)
+        self._note_offset_link()
         check_positive("duration", self.duration)
         check_positive("output_interval", self.output_interval)
         if self.output_interval > self.duration:
@@ -375,6 +377,18 @@ class Scene:
             self.notes = [n for n in self.notes if _STATIC_NOTE not in n] + [
                 f"chain.pretension = {pre:.6g} N {_STATIC_NOTE} {target:g} N at fidelity "
                 f"{level}"]
+
+    def _note_offset_link(self) -> None:
+        """A roller chain alternates inner and outer links, so an odd link count closes only
+        with an offset (cranked) link; the models give every link the same pitch, mass and
+        stiffness, so say it (an even count avoids the offset link)."""
+        links = self.parameters.get("drive.links")
+        self.notes = [n for n in self.notes if not n.startswith(_ODD_NOTE)]
+        if links and int(links) % 2:
+            self.notes.append(f"{_ODD_NOTE} ({int(links)}): the chain closes only with an "
+                              "offset (cranked) link, which the models do not hold (every link "
+                              f"is a plain one); {int(links) + 1} or {int(links) - 1} links "
+                              "need none")
 
     def _apply_chain(self) -> None:
         """Fill the chain values not given from the named chain (or, with none named on a pitch
@@ -525,6 +539,8 @@ class Scene:
         kw.update(overrides)
         scene = base.with_overrides(parameters=data.get("parameters", {}), **kw)
         scene.name = data.get("name", path.stem)
+        if "preset" not in data:   # a drive of its own: nothing was changed from
+            scene.notes = [n for n in scene.notes if not n.startswith(_CHANGED_NOTE)]
         return scene
 
     def with_overrides(self, parameters: Mapping[str, Any] | None = None, **kw) -> "Scene":

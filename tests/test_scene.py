@@ -292,3 +292,21 @@ def test_a_drive_changed_from_a_preset_drops_the_presets_notes_on_its_drive():
     assert not any("197.7 mm" in n for n in other.notes)
     assert any("drive.driver_teeth" in n and "drive.links" in n and "xu2010" in n
                for n in other.notes)
+
+
+def test_an_odd_link_count_is_noted_and_a_file_of_its_own_says_nothing_changed(tmp_path):
+    """A roller chain alternates inner and outer links, so 71 links close only with an offset
+    link (the audit's F6): noted, with the even counts either side; 70 and 72 are not. A scene
+    file with no preset is not "changed from" anything: its notes do not say so."""
+    path = tmp_path / "own.toml"
+    path.write_text('chain = "16B"\n[operating]\ninput_speed_rpm = 100\nload_torque = 50\n'
+                    '[parameters]\n"drive.driver_teeth" = 15\n"drive.driven_teeth" = 30\n'
+                    '"drive.links" = 70\n')
+    scene = load_scene(str(path))
+    assert not any("changed from" in n for n in scene.notes)
+    for links, odd in ((70, False), (71, True), (72, False)):
+        notes = scene.with_overrides(parameters={"drive.links": links}).notes
+        said = [n for n in notes if "offset (cranked) link" in n]
+        assert bool(said) == odd, (links, notes)
+        if odd:
+            assert f"({links})" in said[0] and f"{links + 1} or {links - 1} links" in said[0]
