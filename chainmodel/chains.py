@@ -48,7 +48,7 @@ __all__ = ["ChainDimensions", "DIMENSIONS", "chain", "chain_names", "parameter_v
            "parameter_sources", "chains_of_pitch", "default_chain_for_pitch", "CHAIN_PARAMETERS",
            "hertz_line_contact_approach", "hertz_line_contact_stiffness", "plate_stiffness",
            "link_mass_law", "STEEL_E", "STEEL_NU", "STEEL_DENSITY", "REFERENCE_LOAD_FRACTION",
-           "pitch_mismatch"]
+           "pitch_mismatch", "tooth_width", "sprocket_disc_inertia"]
 
 STEEL_E = 210e9          # Pa, Young's modulus of carbon steel
 STEEL_NU = 0.3           # Poisson's ratio of steel
@@ -172,6 +172,22 @@ def link_mass_law(c: ChainDimensions) -> float:
     plates = 2 * t * (p * h + math.pi * h * h / 4)
     roller = math.pi * c.size.roller_diameter ** 2 / 4 * c.inner_width
     return STEEL_DENSITY * (plates + roller)
+
+
+def tooth_width(c: ChainDimensions) -> float:
+    """ISO 606 sprocket tooth width bf1 of a simplex sprocket [m]: 0.93 b1 up to 12.7 mm pitch,
+    0.95 b1 above."""
+    return (0.93 if c.size.pitch <= 12.7e-3 + 1e-9 else 0.95) * c.inner_width
+
+
+def sprocket_disc_inertia(name: str, teeth: int) -> float:
+    """Polar moment of inertia [kg m^2] of a ``teeth``-tooth sprocket for chain ``name`` taken
+    as a solid steel disc of its pitch diameter d = p / sin(pi / z) and the ISO 606 tooth
+    width w (:func:`tooth_width`): I = rho pi w d^4 / 32. No hub, shaft or machine: an
+    estimate for a drive whose real inertias are not yet known (the example scenes' rule)."""
+    c = chain(name)
+    d = c.size.pitch / math.sin(math.pi / teeth)
+    return STEEL_DENSITY * math.pi * tooth_width(c) * d ** 4 / 32
 
 
 def _seat_contact_law(c: ChainDimensions) -> float:

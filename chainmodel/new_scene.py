@@ -10,7 +10,10 @@ What the file gets when not given (each written as a comment in the file):
   at the centre distance where these links wrap tightly (drive.centre_distance = 0);
 * static_tension: 2 % of the chain's breaking load (an installation pretension; the models
   need some - a tight chain at zero tension has no stiffness across its spans);
-* chain: the B-series ISO 606 chain of the pitch (chainmodel.chains).
+* chain: the B-series ISO 606 chain of the pitch (chainmodel.chains);
+* driver.inertia, driven.inertia: each sprocket as a solid steel disc of its pitch diameter and
+  the ISO 606 tooth width (:func:`chainmodel.chains.sprocket_disc_inertia`, the example scenes'
+  rule) - no hub, shaft or machine, so give the real ones when known.
 """
 
 from __future__ import annotations
@@ -47,7 +50,8 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
                chain: str | None = None, pitch: float | None = None, links: int | None = None,
                centre_distance: float | None = None, static_tension: float | None = None,
                name: str = "my drive", fidelity: str = "torsional", duration: float = 1.0,
-               output_interval: float = 1e-4) -> str:
+               output_interval: float = 1e-4, driver_inertia: float | None = None,
+               driven_inertia: float | None = None) -> str:
     """The commented TOML of a scene; ValueError (naming the option) on bad input. The text is
     checked by loading it (:class:`chainmodel.scene.Scene`) before it is returned."""
     from . import chains as C
@@ -84,6 +88,18 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
         static_tension = round(STATIC_TENSION_FRACTION * values["chain.breaking_load"], 1)
         notes.append(f"static_tension {static_tension:g} N: {100 * STATIC_TENSION_FRACTION:g} % "
                      f"of the {c.name} breaking load (assumed installation pretension)")
+    inertias = {}
+    for side, teeth, given in (("driver", driver_teeth, driver_inertia),
+                               ("driven", driven_teeth, driven_inertia)):
+        key = f"{side}.inertia"
+        if given is not None:
+            inertias[key] = BY_NAME[key].check(given)
+            continue
+        inertias[key] = float(f"{C.sprocket_disc_inertia(c.name, teeth):.4g}")
+        d = p / math.sin(math.pi / teeth)
+        notes.append(f"{key} {inertias[key]:g} kg.m2: a solid steel disc of the {teeth}-tooth "
+                     f"sprocket's pitch diameter {d * 1e3:.2f} mm and the ISO 606 tooth width "
+                     f"{C.tooth_width(c) * 1e3:.2f} mm (no hub, shaft or machine: give yours)")
     a_line = (f"\"drive.centre_distance\" = {centre_distance!r}   # m" if centre_distance else
               "\"drive.centre_distance\" = 0.0   # m; 0: where the chain wraps tightly")
     lines = [
@@ -110,13 +126,12 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
         f"\"drive.pitch\" = {p!r}        # m, ISO 606 {c.name}",
         f"\"drive.links\" = {links}",
         a_line,
+        *[f"\"{k}\" = {v!r}   # kg.m2" for k, v in inertias.items()],
         *(["\"chain.pretension\" = 0.0     # no pretension: the chain carries the tension its "
            "own weight gives (its sag)"] if not static_tension else []),
         "# the chain's values, for reference (uncomment one to replace it):",
         *[f"# \"{k}\" = {v:.6g}" for k, v in values.items() if k != "drive.pitch"],
-        "# values no chain gives keep their defaults (sprocket inertias, shaft, damping):",
-        "# \"driver.inertia\" = 4.0108e-3   # kg.m2",
-        "# \"driven.inertia\" = 9.33e-4     # kg.m2",
+        "# values no chain gives keep their defaults (shaft, damping), e.g.:",
         "# \"input_shaft.stiffness\" = 12000  # N.m/rad",
     ]
     text = "\n".join(lines) + "\n"
@@ -148,6 +163,12 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--static-tension", type=float, metavar="N",
                    help="static span tension at rest [N] (default 2 %% of the breaking load; "
                         "0: no pretension, the chain carries what its own weight gives)")
+    p.add_argument("--driver-inertia", type=float, metavar="KG_M2",
+                   help="driver side's inertia [kg.m2] (default: a solid steel disc of the "
+                        "sprocket)")
+    p.add_argument("--driven-inertia", type=float, metavar="KG_M2",
+                   help="driven side's inertia [kg.m2] (default: a solid steel disc of the "
+                        "sprocket)")
     p.add_argument("--name", default="my drive", help="scene name")
     p.add_argument("--fidelity", default="torsional", help="0-3 or kinematic ... multibody")
     p.add_argument("-o", "--out", metavar="FILE.toml",
@@ -178,7 +199,8 @@ def run(args) -> int:
                           centre_distance=(None if args.centre_distance is None
                                            else args.centre_distance * 1e-3),
                           static_tension=args.static_tension, name=args.name,
-                          fidelity=args.fidelity)
+                          fidelity=args.fidelity, driver_inertia=args.driver_inertia,
+                          driven_inertia=args.driven_inertia)
     except ValueError as exc:
         raise CLIError(str(exc)) from None
     if out is None:

@@ -134,6 +134,50 @@ def test_new_scene_from_a_pitch_assumes_the_b_chain_and_refuses_an_unknown_pitch
     assert err.count("\n") == 1
 
 
+
+def test_new_scene_gives_each_sprocket_its_own_inertia(tmp_path, capsys):
+    """The twenty-fourth session's audit: `new-scene` kept xu2010's sprocket inertias for any
+    drive (a 9/77 08A drive: the driver 375x too heavy, the driven sprocket 57x too light).
+    Each is now a solid steel disc of the pitch diameter p / sin(pi/z) and the ISO 606 tooth
+    width (0.93 b1 up to 12.7 mm pitch, 0.95 b1 above), I = rho pi w d^4 / 32, computed here
+    from ISO 606 Table 1's b1 (08A 7.85 mm, 16B 17.02 mm); the example scenes, which state the
+    same rule, agree to their 3-4 digits; a given inertia is written as given."""
+    def disc(pitch, b1, z):
+        w = (0.93 if pitch <= 12.7e-3 else 0.95) * b1
+        return 7850 * math.pi * w * (pitch / math.sin(math.pi / z)) ** 4 / 32
+
+    for chain, pitch, b1, z1, z2 in (("08A", 12.7e-3, 7.85e-3, 9, 77),
+                                     ("16B", 25.4e-3, 17.02e-3, 15, 30)):
+        path = tmp_path / f"{chain}.toml"
+        code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", z1, "--driven-teeth", z2,
+                                 "--chain", chain, "--speed-rpm", 100, "--load-torque", 10,
+                                 "-o", path)
+        assert code == 0, err
+        text = path.read_text()
+        assert "# assumed: driver.inertia" in text and "# assumed: driven.inertia" in text
+        p = load_scene(path).parameters
+        assert p["driver.inertia"] == pytest.approx(disc(pitch, b1, z1), rel=1e-3)
+        assert p["driven.inertia"] == pytest.approx(disc(pitch, b1, z2), rel=1e-3)
+    for f in FILES:
+        sc = load_scene(f)
+        p, b1 = sc.parameters["drive.pitch"], C.chain(sc.chain).inner_width
+        assert sc.parameters["driver.inertia"] == pytest.approx(disc(p, b1, sc.drive.n_driver),
+                                                                rel=2e-3), f.name
+        assert sc.parameters["driven.inertia"] == pytest.approx(disc(p, b1, sc.drive.n_driven),
+                                                                rel=2e-3), f.name
+    path = tmp_path / "given.toml"
+    code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", 9, "--driven-teeth", 77,
+                             "--chain", "08A", "--speed-rpm", 100, "--load-torque", 10,
+                             "--driver-inertia", 0.02, "--driven-inertia", 0.5, "-o", path)
+    assert code == 0, err
+    assert "# assumed: driver.inertia" not in path.read_text()
+    p = load_scene(path).parameters
+    assert (p["driver.inertia"], p["driven.inertia"]) == (0.02, 0.5)
+    code, out, err = run_cli(capsys, "new-scene", "--driver-teeth", 9, "--driven-teeth", 77,
+                             "--chain", "08A", "--speed-rpm", 100, "--load-torque", 10,
+                             "--driven-inertia", -1)
+    assert code == 2 and "driven.inertia" in err and "-1" in err
+
 def test_run_prints_one_assumed_block_with_the_sources(capsys):
     path = EXAMPLES / "12b_conveyor.toml"
     code, out, err = run_cli(capsys, "run", path, "--fidelity", 0, "--duration", 0.1)

@@ -8,10 +8,16 @@ level 1 against level 3, mean tight / slack span over 1-2 s of a 2 s run.
   45 deg: a heavily loaded drive whose slack span hangs on its sag.
 
     python docs/scripts/hard_sagging_drives.py          # about 10 s with warm kernels
+    python docs/scripts/hard_sagging_drives.py --xu2010-inertias
+
+The sprockets are steel discs (`chainmodel new-scene`'s since the twenty-fifth session); the
+audit ran them with xu2010's sprocket inertias, which `new-scene` gave every drive before
+(``--xu2010-inertias``: driver 4.0108e-3, driven 9.33e-4 kg m2).
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import tempfile
 from pathlib import Path
@@ -36,12 +42,20 @@ def means(path, level, inclination):
     return float(np.mean(r["tight_span.tension"][m])), float(np.mean(r["slack_span.tension"][m]))
 
 
-def main():
+#: the schema defaults (seed 003's xu2010 sprockets), which the audit's drives carried
+XU2010_INERTIAS = dict(driver_inertia=4.0108e-3, driven_inertia=9.33e-4)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--xu2010-inertias", action="store_true",
+                    help="the audit's sprocket inertias in place of steel discs")
+    args = ap.parse_args(argv)
     folder = Path(tempfile.mkdtemp())
     print(f"{'drive':40s} {'level 3 [N]':>18s} {'level 1 [N]':>18s}   error tight / slack")
     for i, (name, kw, inclination) in enumerate(DRIVES):
         path = folder / f"drive{i}.toml"
-        path.write_text(scene_text(**kw))
+        path.write_text(scene_text(**kw, **(XU2010_INERTIAS if args.xu2010_inertias else {})))
         t3, s3 = means(path, 3, inclination)
         t1, s1 = means(path, 1, inclination)
         print(f"{name:40s} {t3:8.1f} / {s3:7.1f} {t1:8.1f} / {s1:7.1f}   "
