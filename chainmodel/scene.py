@@ -331,6 +331,7 @@ _STATIC_NOTE = "for a static span tension of"
 _CHAIN_NOTE = "no chain named: ISO 606"
 _CHANGED_NOTE = "drive changed from"
 _ODD_NOTE = "drive.links is odd"
+_INERTIA_NOTE = "default inertia:"
 
 
 @dataclass
@@ -358,6 +359,7 @@ class Scene:
         self._apply_chain()
         self.parameters = P.validate(self.parameters)
         self._note_offset_link()
+        self._note_default_inertias()
         check_positive("duration", self.duration)
         check_positive("output_interval", self.output_interval)
         if self.output_interval > self.duration:
@@ -389,6 +391,31 @@ class Scene:
                               "offset (cranked) link, which the models do not hold (every link "
                               f"is a plain one); {int(links) + 1} or {int(links) - 1} links "
                               "need none")
+
+    def _note_default_inertias(self) -> None:
+        """A sprocket inertia left at the schema default is seed 003's xu2010 sprocket (25 and
+        17 teeth, 15.875 mm); on another sprocket say so, with the steel disc of this one
+        (chainmodel.chains.sprocket_disc_inertia) for scale."""
+        from . import chains as C
+        self.notes = [n for n in self.notes if not n.startswith(_INERTIA_NOTE)]
+        sources = self.value_sources()
+        drive = self.drive
+        xu = {"driver": 25, "driven": 17}
+        name = self.chain or C.default_chain_for_pitch(drive.pitch)
+        for side, teeth in (("driver", drive.n_driver), ("driven", drive.n_driven)):
+            key = f"{side}.inertia"
+            if not sources[key].startswith("default:") or (
+                    teeth == xu[side] and abs(drive.pitch - 0.015875) < 1e-9):
+                continue
+            disc = ("" if name is None else
+                    f"; a solid steel disc of this one would be "
+                    f"{C.sprocket_disc_inertia(name, teeth):.3g} kg.m2")
+            self.notes.append(
+                f"{_INERTIA_NOTE} {key} = {self.parameters[key]:g} kg.m2 is xu2010's "
+                f"{xu[side]}-tooth sprocket (seed 003), the default, not this drive's "
+                f"{teeth}-tooth{' ' + name if name else ''} one{disc} "
+                "(chainmodel.chains.sprocket_disc_inertia, no hub or machine): give the real "
+                "value")
 
     def _apply_chain(self) -> None:
         """Fill the chain values not given from the named chain (or, with none named on a pitch

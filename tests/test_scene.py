@@ -310,3 +310,24 @@ def test_an_odd_link_count_is_noted_and_a_file_of_its_own_says_nothing_changed(t
         assert bool(said) == odd, (links, notes)
         if odd:
             assert f"({links})" in said[0] and f"{links + 1} or {links - 1} links" in said[0]
+
+
+def test_a_default_sprocket_inertia_on_another_sprocket_is_noted(tmp_path):
+    """The schema's sprocket inertias are seed 003's xu2010 sprockets (25 and 17 teeth of
+    15.875 mm pitch). A file of another drive that leaves them is told so, with the steel
+    disc of its own sprocket, rho pi w d^4 / 32 with d = p / sin(pi / z) and w = 0.93 b1
+    (ISO 606 08B: b1 = 7.75 mm), computed here; given inertias, xu2010 itself and a preset
+    with its own (C1, seed 004 Table 2) get no such note."""
+    path = tmp_path / "own.toml"
+    path.write_text('chain = "08B"\n[operating]\ninput_speed_rpm = 100\nload_torque = 5\n'
+                    '[parameters]\n"drive.driver_teeth" = 13\n"drive.driven_teeth" = 39\n'
+                    '"drive.links" = 110\n')
+    notes = [n for n in load_scene(str(path)).notes if n.startswith("default inertia:")]
+    assert [n.split()[2] for n in notes] == ["driver.inertia", "driven.inertia"]
+    for note, z in zip(notes, (13, 39)):
+        disc = 7850 * math.pi * 0.93 * 7.75e-3 * (12.7e-3 / math.sin(math.pi / z)) ** 4 / 32
+        assert f"{z}-tooth 08B one" in note and f"would be {disc:.3g} kg.m2" in note
+    given = load_scene(str(path), driver_inertia=1e-4, driven_inertia=3e-3).notes
+    assert not any(n.startswith("default inertia:") for n in given)
+    for name in ("xu2010", "C1"):
+        assert not any(n.startswith("default inertia:") for n in load_scene(name).notes)

@@ -13,12 +13,21 @@ its size against the peak inside the band: a check of the mode picked that does 
 it (on a hanging chain the spans' sag modes ring too, below the band). A drive whose scene or
 fit is refused prints why.
 
-    python docs/scripts/unseen_ringdown.py      # about 11 s with warm kernels
+    python docs/scripts/unseen_ringdown.py                   # about 11 s with warm kernels
+    python docs/scripts/unseen_ringdown.py --disc-inertias   # the unseen drives' sprockets as
+                                                             # steel discs (new-scene's now)
+
+The unseen drives were written when `new-scene` left the sprocket inertias at xu2010's
+(4.0108e-3 / 9.33e-4 kg m2); ``--disc-inertias`` runs copies whose sprockets are solid steel
+discs (chainmodel.chains.sprocket_disc_inertia, what `new-scene` writes since the twenty-fifth
+session; the example scenes have them already).
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
+import tempfile
 from pathlib import Path
 
 from chainmodel.models.wrap_statics import wrap_fit
@@ -28,17 +37,39 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests"))
 from ringdown_check import peak_frequency, ring, ring_run, spectrum  # noqa: E402
 
-DRIVES = ([ROOT / "examples" / "scenes" / n for n in
-           ("12b_conveyor.toml", "16b_mixer.toml", "08b_fan_1500rpm.toml")]
-          + sorted((Path(__file__).resolve().parent / "unseen_drives").glob("*.toml")))
+EXAMPLES = [ROOT / "examples" / "scenes" / n for n in
+            ("12b_conveyor.toml", "16b_mixer.toml", "08b_fan_1500rpm.toml")]
+UNSEEN = sorted((Path(__file__).resolve().parent / "unseen_drives").glob("*.toml"))
 ON = {"torsional_wrap_statics": True}
 WIDE = (10.0, 5000.0)
 
 
-def main():
+def with_disc_inertias(paths):
+    """Copies of the scene files ``paths`` whose sprocket inertias are steel discs."""
+    from chainmodel.chains import sprocket_disc_inertia
+    folder = Path(tempfile.mkdtemp())
+    out = []
+    for path in paths:
+        sc = load_scene(str(path))
+        discs = (f'"driver.inertia" = {sprocket_disc_inertia(sc.chain, sc.drive.n_driver):.4g}\n'
+                 f'"driven.inertia" = {sprocket_disc_inertia(sc.chain, sc.drive.n_driven):.4g}\n')
+        text = path.read_text()
+        tables = [ln for ln in text.splitlines() if ln.startswith("[")]
+        assert tables[-1].startswith("[parameters]"), path   # the lines go to its last table
+        (folder / path.name).write_text(text.rstrip("\n") + "\n" + discs)
+        out.append(folder / path.name)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--disc-inertias", action="store_true",
+                    help="the unseen drives' sprockets as steel discs")
+    args = ap.parse_args(argv)
+    drives = EXAMPLES + (with_disc_inertias(UNSEEN) if args.disc_inertias else UNSEEN)
     print(f"{'drive':22s} {'T0 [N]':>7s} {'Km/K3':>6s} {'L3 lin.':>8s} {'L3 ring':>8s} "
           f"{'L3 wide':>13s} {'L1 wrap':>16s} {'L2 wrap':>16s} {'L1 ladder':>16s}")
-    for path in DRIVES:
+    for path in drives:
         try:
             sc = load_scene(str(path), fidelity=1, **ON)
             fit = wrap_fit(sc.drive, sc.parameters)
