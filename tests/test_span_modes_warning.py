@@ -57,32 +57,61 @@ def test_level1_warns_where_the_meshing_reaches_the_slack_spans_string_mode(name
         assert "fidelity 2 or 3" in warned[0]
 
 
-def test_level0_warns_as_level1_and_level2_does_not():
-    """Level 0 has no span modes either; level 2 carries them (its strings), so the check does
-    not apply to it."""
+def test_level0_warns_as_level1():
+    """Level 0 has no span modes either."""
     assert any(CODE_TEXT in w for w in _run("xu2010", 0, 120.0).warnings)
-    assert not any(CODE_TEXT in w for w in _run("xu2010", 2, 120.0).warnings)
 
 
-@pytest.mark.parametrize("name,rpm", [("xu2010", 120.0), ("xu2010", 21.0), ("C1", 45.0)])
-def test_the_fmu_path_says_what_the_whole_run_says(name, rpm):
+LEVEL2_TEXT = "string mode per span (modal.modes)"
+
+
+@pytest.mark.parametrize("name,rpm", [("xu2010", 60.0), ("C1", 100.0), ("xu2010", 600.0),
+                                      ("C1", 400.0)])
+def test_level2_warns_where_the_meshing_reaches_the_second_string_mode(name, rpm):
+    """Level 2 holds one string mode per span by default: it warns where the meshing reaches
+    LEVEL2_SPAN_MODE_RATIO = 2 x the slack span's first string mode (its second mode), f_1
+    computed here as above at level 2's own mean slack tension; points at least 15 % away from
+    the line (xu2010 60 rpm and C1 100 rpm below it, xu2010 600 rpm and C1 400 rpm above)."""
+    from chainmodel.validity import LEVEL2_SPAN_MODE_RATIO
+    r = _run(name, 2, rpm)
+    d = load_scene(name).drive
+    turned = np.abs(r["driver.angle"] - r["driver.angle"][0]) >= 2 * math.pi / d.n_driver
+    f_1 = _first_string_mode(name, float(np.mean(r["slack_span.tension"][turned])), rpm)
+    ratio = (d.n_driver * rpm / 60.0) / f_1
+    assert abs(ratio / LEVEL2_SPAN_MODE_RATIO - 1.0) > 0.15, ratio
+    warned = [w for w in r.warnings if LEVEL2_TEXT in w]
+    assert bool(warned) == (ratio >= LEVEL2_SPAN_MODE_RATIO), (ratio, r.warnings)
+    assert not any(CODE_TEXT in w for w in r.warnings)      # level 1's sentence is not level 2's
+    if warned:
+        named = float(re.search(r"first string mode \(([\d.]+) Hz", warned[0]).group(1))
+        assert named == pytest.approx(f_1, rel=0.03)
+        assert "fidelity 3" in warned[0]
+
+
+@pytest.mark.parametrize("name,rpm,level", [("xu2010", 120.0, 1), ("xu2010", 21.0, 1),
+                                            ("C1", 45.0, 1), ("xu2010", 120.0, 2),
+                                            ("xu2010", 60.0, 2)])
+def test_the_fmu_path_says_what_the_whole_run_says(name, rpm, level):
     """Sample by sample (the FMU's Monitor.update) the check fires once where the whole run's
     check fires, and not where it does not: xu2010 at 21 rpm sits just below the threshold,
-    where a judgement on the start-up's means alone had fired (an independent review)."""
+    where a judgement on the start-up's means alone had fired (an independent review). Level
+    2's own check likewise, at 120 rpm (above its line) and 60 rpm (below)."""
     from chainmodel.models import ALL_OUTPUTS
     from chainmodel.validity import Monitor
 
-    sc = load_scene(name, fidelity=1)
-    r = _run(name, 1, rpm)
-    names = [o.name for o in ALL_OUTPUTS]
+    sc = load_scene(name, fidelity=level)
+    r = _run(name, level, rpm)
+    names = [o.name for o in ALL_OUTPUTS if o.name in r.names]
     rows = np.column_stack([r[n] for n in names])
-    mon = Monitor(sc.drive, sc.parameters, 1, names)
+    mon = Monitor(sc.drive, sc.parameters, level, names)
     said = []
     for t, row in zip(r.time, rows):
-        said += mon.update(t, row, rpm * 2 * math.pi / 60.0)
-    whole = any(p.code == "span_modes_missing" for p in r.problems)
-    assert sum(CODE_TEXT in s for s in said) == int(whole)
-    assert whole == (rpm != 21.0)
+        said += mon.update(t, row, rpm * 2 * math.pi / 60.0, sc.operating.load_torque)
+    code, text = (("span_modes_missing", CODE_TEXT) if level == 1 else
+                  ("span_modes_beyond", LEVEL2_TEXT))
+    whole = any(p.code == code for p in r.problems)
+    assert sum(text in s for s in said) == int(whole)
+    assert whole == (rpm not in (21.0, 60.0))
 
 
 def test_a_slack_span_at_its_centrifugal_tension_is_warned():
