@@ -399,13 +399,16 @@ class Scene:
         from . import chains as C
         self.notes = [n for n in self.notes if not n.startswith(_INERTIA_NOTE)]
         sources = self.value_sources()
-        drive = self.drive
         xu = {"driver": 25, "driven": 17}
-        name = self.chain or C.default_chain_for_pitch(drive.pitch)
-        for side, teeth in (("driver", drive.n_driver), ("driven", drive.n_driven)):
+        # the parameters, not self.drive: building the Drive checks the wrap, which a scene
+        # leaves to its run (a study loads its cases before it runs them)
+        pitch = self.parameters["drive.pitch"]
+        name = self.chain or C.default_chain_for_pitch(pitch)
+        for side in ("driver", "driven"):
+            teeth = int(self.parameters[f"drive.{side}_teeth"])
             key = f"{side}.inertia"
             if not sources[key].startswith("default:") or (
-                    teeth == xu[side] and abs(drive.pitch - 0.015875) < 1e-9):
+                    teeth == xu[side] and abs(pitch - 0.015875) < 1e-9):
                 continue
             disc = ("" if name is None else
                     f"; a solid steel disc of this one would be "

@@ -385,7 +385,8 @@ def test_item6_level2_is_not_supercritical_below_its_effective_tension(wrap):
                             load_torque=2.0, duration=0.1, output_interval=1e-4,
                             ramp_time=0.02)
     check_plausible(r, 5e-3)
-    assert r.warnings == []
+    # at 2000 rpm the meshing is far above the second string mode: that warning only
+    assert {p.code for p in r.problems} == {"span_modes_beyond"}
     assert np.max(np.abs(r["tight_span.midspan_deflection"])) < 0.01
 
 
