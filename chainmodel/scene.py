@@ -274,9 +274,15 @@ def _search_pretension(level: int, drive: Drive, params: dict, target: float) ->
             weight = (" with no pretension (the spans' weight included: a chain under gravity "
                       "carries at least its sag tension; chain.pretension = 0 instead of a "
                       "static_tension asks for exactly that)")
+        if params["drive.centre_distance"] == 0.0:
+            # at the tight wrap more links only lengthen the spans and raise the sag tension
+            fix = (f"give drive.centre_distance below the {1e3 * drive.centre_distance:.5g} mm "
+                   f"at which these {drive.links} links wrap tightly (drive.centre_distance = "
+                   "0), so that the chain hangs deeper")
+        else:
+            fix = "shorten drive.centre_distance (or use more links)"
         raise ValueError(f"static_tension {target:g} N is below the {t0:.4g} N the centre "
-                         f"distance already gives at fidelity {level}{weight}; shorten "
-                         "drive.centre_distance (or use more links)")
+                         f"distance already gives at fidelity {level}{weight}; {fix}")
     if abs(target - t0) <= tol:
         return 0.0
     limit = 0.05 * params["chain.link_stiffness"] * params["drive.pitch"] * (1 - 1e-9)

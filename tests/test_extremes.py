@@ -455,6 +455,20 @@ def test_item9_soft_chain_names_the_chain(level):
         chainmodel.simulate("xu2010", fidelity=level, chain_link_stiffness=5.1e4, duration=0.1)
 
 
+def test_item9_a_load_beyond_the_breaking_load_names_it_not_a_stiffer_link():
+    """xu2010 (10B, ISO 606 F_u 22.2 kN) at 5000 N.m: the tight span would carry 5000 / R2
+    (R2 = p / (2 sin(pi / 17)), computed here), 5.2 x the breaking load. An audit followed the
+    old advice, a stiffer link, and ran a 116 kN span: the refusal names the breaking load and
+    the load it allows, F_u R2."""
+    r2 = 0.015875 / (2 * math.sin(math.pi / 17))
+    with pytest.raises(ValueError) as err:
+        chainmodel.simulate("xu2010", fidelity=1, load_torque=5000.0, duration=0.1)
+    text = str(err.value)
+    assert f"would carry {5000.0 / r2:.4g} N, above the chain's breaking load" in text
+    assert f"use a load below {22.2e3 * r2:.4g} N.m" in text
+    assert "chain.link_stiffness >=" not in text
+
+
 def test_item9_level2_at_10000_rpm_names_the_speed_and_why():
     with pytest.raises(ValueError, match=r"input_speed_rpm.*10000 rpm.*axial natural frequency"):
         chainmodel.simulate("xu2010", fidelity=2, input_speed_rpm=10000, duration=0.1)

@@ -331,3 +331,22 @@ def test_a_default_sprocket_inertia_on_another_sprocket_is_noted(tmp_path):
     assert not any(n.startswith("default inertia:") for n in given)
     for name in ("xu2010", "C1"):
         assert not any(n.startswith("default inertia:") for n in load_scene(name).notes)
+
+
+def test_a_static_tension_below_the_sag_at_the_tight_wrap_is_told_to_shorten_the_centres():
+    """At drive.centre_distance = 0 (the tight wrap, new-scene's default) more links only
+    lengthen the spans and raise the sag tension (an audit: 110 -> 130 links, 381 -> 470 N), so
+    the refusal asks for a centre distance below the tight one, and that lowers the tension."""
+    base = dict(chain="16B", drive_driver_teeth=19, drive_driven_teeth=38, drive_pitch=0.0254,
+                input_speed_rpm=100.0, load_torque=50.0, chain_pretension=0.0, fidelity=1)
+    tight = {n: load_scene("xu2010", drive_links=n, drive_centre_distance=0.0, **base)
+             for n in (110, 130)}
+    floors = {n: sc.model().static_tension() for n, sc in tight.items()}
+    assert floors[130] > floors[110]
+    a = tight[110].drive.centre_distance
+    with pytest.raises(ValueError, match=rf"give drive\.centre_distance below the "
+                                         rf"{1e3 * a:.5g} mm at which these 110 links wrap"):
+        load_scene("xu2010", drive_links=110, drive_centre_distance=0.0,
+                   **dict(base, chain_pretension=None), static_tension=50.0)
+    shorter = load_scene("xu2010", drive_links=110, drive_centre_distance=a - 0.01, **base)
+    assert shorter.model().static_tension() < floors[110]

@@ -340,6 +340,15 @@ class Model(ABC):
             bounds = self.__dict__["_input_bounds"] = (*self.speed_limit(), self.torque_limit())
         w_max, why, t_max = bounds
         if abs(torque) > t_max:
+            force = abs(torque) / self.drive.driven.pitch_radius
+            breaking = self.params.get("chain.breaking_load") or math.inf
+            if force > breaking:     # a stiffer link would not make such a chain hold
+                return (f"input load.torque = {torque:.6g} N.m is beyond +-{t_max:.4g} N.m: "
+                        f"the tight span would carry {force:.4g} N, above the chain's breaking "
+                        f"load (chain.breaking_load = {breaking:.4g} N) and beyond "
+                        f"{100 * limits.STRAIN_LIMIT:g} % strain of a link, where the models "
+                        f"hold; use a load below {breaking * self.drive.driven.pitch_radius:.4g} "
+                        f"N.m (the breaking load on the driven pitch radius) or a larger chain")
             return (f"input load.torque = {torque:.6g} N.m is beyond +-{t_max:.4g} N.m: the tight "
                     f"span would carry {abs(torque) / self.drive.driven.pitch_radius:.4g} N, "
                     f"more than {100 * limits.STRAIN_LIMIT:g} % strain of a link of "
