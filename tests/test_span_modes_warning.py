@@ -133,15 +133,17 @@ def test_a_slack_span_at_its_centrifugal_tension_is_warned():
 
 
 @pytest.mark.fmu
-def test_the_fmu_logs_it_as_fmi2warning_once(chaindrive_fmu):
+@pytest.mark.parametrize("level", [1, 2])
+def test_the_fmu_logs_it_as_fmi2warning_once(chaindrive_fmu, level):
     """Through the built FMU (fmpy): logged once at 120 rpm, not at 15 rpm (f_m / f_1 = 2.2 and
-    0.28 in the test above's terms)."""
+    0.28 in the tests above' terms), at level 1 and, with its own sentence, at level 2."""
     from chainmodel.fmu import simulate_fmu
+    text = CODE_TEXT if level == 1 else LEVEL2_TEXT
     for rpm, duration, expected in ((120.0, 0.2, 1), (15.0, 0.6, 0)):
         messages = []
-        simulate_fmu(chaindrive_fmu, load_scene("xu2010", fidelity=1, duration=duration,
+        simulate_fmu(chaindrive_fmu, load_scene("xu2010", fidelity=level, duration=duration,
                                                 input_speed_rpm=rpm), log=messages.append)
-        warned = [m for m in messages if m.startswith("[WARNING]") and CODE_TEXT in m]
+        warned = [m for m in messages if m.startswith("[WARNING]") and text in m]
         assert len(warned) == expected, (rpm, messages)
 
 
