@@ -338,6 +338,7 @@ _CHAIN_NOTE = "no chain named: ISO 606"
 _CHANGED_NOTE = "drive changed from"
 _ODD_NOTE = "drive.links is odd"
 _INERTIA_NOTE = "default inertia:"
+_SHAFT_NOTE = "default shaft:"
 
 
 @dataclass
@@ -403,7 +404,8 @@ class Scene:
         17 teeth, 15.875 mm); on another sprocket say so, with the steel disc of this one
         (chainmodel.chains.sprocket_disc_inertia) for scale."""
         from . import chains as C
-        self.notes = [n for n in self.notes if not n.startswith(_INERTIA_NOTE)]
+        self.notes = [n for n in self.notes
+                      if not n.startswith(_INERTIA_NOTE) and not n.startswith(_SHAFT_NOTE)]
         sources = self.value_sources()
         xu = {"driver": 25, "driven": 17}
         # the parameters, not self.drive: building the Drive checks the wrap, which a scene
@@ -425,6 +427,28 @@ class Scene:
                 f"{teeth}-tooth{' ' + name if name else ''} one{disc} "
                 "(chainmodel.chains.sprocket_disc_inertia, no hub or machine): give the real "
                 "value")
+        self._note_default_shaft(sources, name)
+
+    def _note_default_shaft(self, sources, chain_name) -> None:
+        """The schema's input shaft is xu2010's (seed 003: 12 kN.m/rad). On another drive left
+        at it, say how far the load's torque at the driver winds it: a heavy drive on that
+        shaft rings (an audit's 16A 11/55 at 9000 N.m: the driver swinging -0.9 to 16 rad/s
+        about 5.3, the chain past its breaking load at level 3; rigid, 42 kN peaks)."""
+        p = self.parameters
+        if (not sources["input_shaft.stiffness"].startswith("default:")
+                or p["input_shaft.rigid"] or p["input_shaft.causality"] != "angle"):
+            return
+        z1, z2 = int(p["drive.driver_teeth"]), int(p["drive.driven_teeth"])
+        if (z1, z2) == (25, 17) and abs(p["drive.pitch"] - 0.015875) < 1e-9:
+            return
+        torque = abs(self.operating.load_torque) * z1 / z2
+        k = p["input_shaft.stiffness"]
+        self.notes.append(
+            f"{_SHAFT_NOTE} input_shaft.stiffness = {k:g} N.m/rad is xu2010's input shaft "
+            f"(seed 003), the default; this drive's load puts about {torque:.4g} N.m on it, "
+            f"winding it {torque / k:.3g} rad ({math.degrees(torque / k):.3g} deg): give your "
+            "shaft's stiffness (G pi d^4 / 32 L for a plain steel shaft) or set "
+            "input_shaft.rigid = true")
 
     def _apply_chain(self) -> None:
         """Fill the chain values not given from the named chain (or, with none named on a pitch

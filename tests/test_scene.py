@@ -350,3 +350,21 @@ def test_a_static_tension_below_the_sag_at_the_tight_wrap_is_told_to_shorten_the
                    **dict(base, chain_pretension=None), static_tension=50.0)
     shorter = load_scene("xu2010", drive_links=110, drive_centre_distance=a - 0.01, **base)
     assert shorter.model().static_tension() < floors[110]
+
+
+def test_a_default_input_shaft_on_another_drive_is_noted_with_its_wind_up(tmp_path):
+    """The schema's input shaft is xu2010's (seed 003, 12 kN.m/rad). A heavy drive left on it
+    (an audit's 16A 11/55 at 9000 N.m) is told the torque its load puts on the shaft, load x
+    z1 / z2, and the wind-up, that over the stiffness, both computed here; a given stiffness,
+    a rigid shaft and xu2010 itself get no such note."""
+    path = tmp_path / "heavy.toml"
+    path.write_text('chain = "16A"\n[operating]\ninput_speed_rpm = 50\nload_torque = 9000\n'
+                    '[parameters]\n"drive.driver_teeth" = 11\n"drive.driven_teeth" = 55\n'
+                    '"drive.links" = 120\n')
+    notes = [n for n in load_scene(str(path)).notes if n.startswith("default shaft:")]
+    torque = 9000.0 * 11 / 55
+    assert len(notes) == 1 and f"about {torque:.4g} N.m" in notes[0]
+    assert f"winding it {torque / 12000.0:.3g} rad" in notes[0]
+    for kw in ({"input_shaft_stiffness": 1e6}, {"input_shaft_rigid": True}):
+        assert not any(n.startswith("default shaft:") for n in load_scene(str(path), **kw).notes)
+    assert not any(n.startswith("default shaft:") for n in load_scene("xu2010").notes)
