@@ -185,8 +185,9 @@ def sprocket_disc_inertia(name: str, teeth: int) -> float:
     as a solid steel disc of its pitch diameter d = p / sin(pi / z) and the ISO 606 tooth
     width w (:func:`tooth_width`): I = rho pi w d^4 / 32. No hub, shaft or machine: an
     estimate for a drive whose real inertias are not yet known (the example scenes' rule)."""
+    from .geometry import Sprocket
     c = chain(name)
-    d = c.size.pitch / math.sin(math.pi / teeth)
+    d = 2.0 * Sprocket(teeth, c.size.pitch).pitch_radius
     return STEEL_DENSITY * math.pi * tooth_width(c) * d ** 4 / 32
 
 

@@ -55,6 +55,7 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
     """The commented TOML of a scene; ValueError (naming the option) on bad input. The text is
     checked by loading it (:class:`chainmodel.scene.Scene`) before it is returned."""
     from . import chains as C
+    from .geometry import Sprocket
     from .parameters import BY_NAME, fidelity_level
     for opt, v in (("driver_teeth", driver_teeth), ("driven_teeth", driven_teeth)):
         BY_NAME[f"drive.{opt}"].check(v)
@@ -96,7 +97,7 @@ def scene_text(driver_teeth: int, driven_teeth: int, speed_rpm: float, load_torq
             inertias[key] = BY_NAME[key].check(given)
             continue
         inertias[key] = float(f"{C.sprocket_disc_inertia(c.name, teeth):.4g}")
-        d = p / math.sin(math.pi / teeth)
+        d = 2.0 * Sprocket(teeth, p).pitch_radius
         notes.append(f"{key} {inertias[key]:g} kg.m2: a solid steel disc of the {teeth}-tooth "
                      f"sprocket's pitch diameter {d * 1e3:.2f} mm and the ISO 606 tooth width "
                      f"{C.tooth_width(c) * 1e3:.2f} mm (no hub, shaft or machine: give yours)")

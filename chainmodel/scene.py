@@ -366,7 +366,7 @@ class Scene:
         self._apply_chain()
         self.parameters = P.validate(self.parameters)
         self._note_offset_link()
-        self._note_default_inertias()
+        self._note_defaults()
         check_positive("duration", self.duration)
         check_positive("output_interval", self.output_interval)
         if self.output_interval > self.duration:
@@ -399,37 +399,44 @@ class Scene:
                               f"is a plain one); {int(links) + 1} or {int(links) - 1} links "
                               "need none")
 
-    def _note_default_inertias(self) -> None:
-        """A sprocket inertia left at the schema default is seed 003's xu2010 sprocket (25 and
-        17 teeth, 15.875 mm); on another sprocket say so, with the steel disc of this one
-        (chainmodel.chains.sprocket_disc_inertia) for scale."""
-        from . import chains as C
+    def _note_defaults(self) -> None:
+        """The schema's sprocket inertias and input shaft are seed 003's xu2010 drive's (its
+        default drive: 25 / 17 teeth of 15.875 mm). On another drive that leaves them, say so:
+        :meth:`_note_default_inertias`, :meth:`_note_default_shaft`."""
         self.notes = [n for n in self.notes
                       if not n.startswith(_INERTIA_NOTE) and not n.startswith(_SHAFT_NOTE)]
         sources = self.value_sources()
-        xu = {"driver": 25, "driven": 17}
         # the parameters, not self.drive: building the Drive checks the wrap, which a scene
         # leaves to its run (a study loads its cases before it runs them)
-        pitch = self.parameters["drive.pitch"]
-        name = self.chain or C.default_chain_for_pitch(pitch)
-        for side in ("driver", "driven"):
-            teeth = int(self.parameters[f"drive.{side}_teeth"])
+        p = self.parameters
+        same_pitch = abs(p["drive.pitch"] - P.BY_NAME["drive.pitch"].default) < 1e-9
+        teeth = {side: (int(p[f"drive.{side}_teeth"]), P.BY_NAME[f"drive.{side}_teeth"].default)
+                 for side in ("driver", "driven")}
+        self._note_default_inertias(sources, teeth, same_pitch)
+        if not (same_pitch and all(own == xu for own, xu in teeth.values())):
+            self._note_default_shaft(sources)
+
+    def _note_default_inertias(self, sources, teeth, same_pitch) -> None:
+        """A sprocket inertia left at the schema default on a sprocket other than the default
+        drive's (``teeth``: side -> (this drive's, the default drive's)): the note gives the
+        steel disc of this one (chainmodel.chains.sprocket_disc_inertia) for scale."""
+        from . import chains as C
+        name = self.chain or C.default_chain_for_pitch(self.parameters["drive.pitch"])
+        for side, (own, xu) in teeth.items():
             key = f"{side}.inertia"
-            if not sources[key].startswith("default:") or (
-                    teeth == xu[side] and abs(pitch - 0.015875) < 1e-9):
+            if not sources[key].startswith("default:") or (own == xu and same_pitch):
                 continue
             disc = ("" if name is None else
                     f"; a solid steel disc of this one would be "
-                    f"{C.sprocket_disc_inertia(name, teeth):.3g} kg.m2")
+                    f"{C.sprocket_disc_inertia(name, own):.3g} kg.m2")
             self.notes.append(
                 f"{_INERTIA_NOTE} {key} = {self.parameters[key]:g} kg.m2 is xu2010's "
-                f"{xu[side]}-tooth sprocket (seed 003), the default, not this drive's "
-                f"{teeth}-tooth{' ' + name if name else ''} one{disc} "
+                f"{xu}-tooth sprocket (seed 003), the default, not this drive's "
+                f"{own}-tooth{' ' + name if name else ''} one{disc} "
                 "(chainmodel.chains.sprocket_disc_inertia, no hub or machine): give the real "
                 "value")
-        self._note_default_shaft(sources, name)
 
-    def _note_default_shaft(self, sources, chain_name) -> None:
+    def _note_default_shaft(self, sources) -> None:
         """The schema's input shaft is xu2010's (seed 003: 12 kN.m/rad). On another drive left
         at it, say how far the load's torque at the driver winds it: a heavy drive on that
         shaft rings (an audit's 16A 11/55 at 9000 N.m: the driver swinging -0.9 to 16 rad/s
@@ -438,10 +445,8 @@ class Scene:
         if (not sources["input_shaft.stiffness"].startswith("default:")
                 or p["input_shaft.rigid"] or p["input_shaft.causality"] != "angle"):
             return
-        z1, z2 = int(p["drive.driver_teeth"]), int(p["drive.driven_teeth"])
-        if (z1, z2) == (25, 17) and abs(p["drive.pitch"] - 0.015875) < 1e-9:
-            return
-        torque = abs(self.operating.load_torque) * z1 / z2
+        torque = (abs(self.operating.load_torque) * int(p["drive.driver_teeth"])
+                  / int(p["drive.driven_teeth"]))
         k = p["input_shaft.stiffness"]
         self.notes.append(
             f"{_SHAFT_NOTE} input_shaft.stiffness = {k:g} N.m/rad is xu2010's input shaft "

@@ -825,14 +825,20 @@ class Monitor:
             return None
         return f_m, f_1, slack
 
+    def _span_line(self, f_m, f_1, slack, share) -> tuple[str, float]:
+        """The span-modes warnings' shared parts: where the meshing f_m lies against the slack
+        span's first string mode f_1 (the line at ``share`` x f_1), and the input speed [rpm]
+        below the line, rounded down so that the speed printed is below it."""
+        where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at its "
+                 f"mean {slack:.4g} N; warned from {share:g} x)" if f_1 > 0.0
+                 else f"above every string mode of the slack span, whose mean {slack:.4g} N is "
+                 "no more than its centrifugal tension")
+        return where, math.floor(600.0 * share * f_1 / self.drive.n_driver) / 10.0
+
     def _beyond_level2(self, f_m, f_1, slack) -> Problem:
         """Level 2's span-modes warning: the meshing reaches string modes it does not hold."""
         n = int(self.params["modal.modes"])
-        below = math.floor(600.0 * LEVEL2_SPAN_MODE_RATIO * f_1 / self.drive.n_driver) / 10.0
-        where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at its "
-                 f"mean {slack:.4g} N; warned from {LEVEL2_SPAN_MODE_RATIO:g} x)" if f_1 > 0.0
-                 else f"above every string mode of the slack span, whose mean {slack:.4g} N is "
-                 "no more than its centrifugal tension")
+        where, below = self._span_line(f_m, f_1, slack, LEVEL2_SPAN_MODE_RATIO)
         return Problem("span_modes_beyond", (
             f"level 2 holds {n} string mode{'s' if n > 1 else ''} per span "
             f"(modal.modes), and the meshing ({f_m:.4g} Hz) is {where}: where the spans bow "
@@ -894,12 +900,7 @@ class Monitor:
             out.append(self._beyond_level2(*found))
         elif found is not None:
             f_m, f_1, slack = found
-            # rounded down: the speed printed is below the line
-            below = math.floor(10.0 * SPAN_MODE_SHARE * f_1 * 60.0 / d.n_driver) / 10.0
-            where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at "
-                     f"its mean {slack:.4g} N; warned from {SPAN_MODE_SHARE:g} x)" if f_1 > 0.0
-                     else f"above every string mode of the slack span, whose mean {slack:.4g} "
-                     f"N is no more than its centrifugal tension")
+            where, below = self._span_line(f_m, f_1, slack, SPAN_MODE_SHARE)
             out.append(Problem("span_modes_missing", (
                 f"level {self.level} has no span modes, and the meshing ({f_m:.4g} Hz) is "
                 f"{where}: where the spans bow, "

@@ -497,24 +497,24 @@ class ChainDrive(Fmi2Slave):
             return False
         values = self._store_row(row)
         self._stale = False
-        if not self._told_turns:     # each logged once
-            note = session.restart_note(current_time)
-            if note:
-                self._told_turns = True
-                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.ok, "logAll")
+        # each logged once (the flag tested first: the notes are not looked for again)
+        if not self._told_turns:
+            self._told_turns = self._log_once(session.restart_note(current_time),
+                                              Fmi2Status.ok, "logAll")
         if not self._told_jump:
-            note = session.jump_warning()
-            if note:
-                self._told_jump = True
-                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.warning)
+            self._told_jump = self._log_once(session.jump_warning(), Fmi2Status.warning)
         if not self._told_hold:
-            note = session.hold_warning()
-            if note:
-                self._told_hold = True
-                self.log(_fmi_text(note + " (logged once)"), Fmi2Status.warning)
+            self._told_hold = self._log_once(session.hold_warning(), Fmi2Status.warning)
         if session.torque_causal:   # the validity checks' input speed: the motor rotor's
             speed = session.motor_values()[1]
         self._check_validity(current_time + step_size, values, speed, session.torque)
+        return True
+
+    def _log_once(self, note, status, category=None) -> bool:
+        """Log ``note`` (None: nothing to say) as said once; whether it was logged."""
+        if not note:
+            return False
+        self.log(_fmi_text(note + " (logged once)"), status, category)
         return True
 
     def _check_validity(self, t, row, speed, load, found=()):

@@ -350,11 +350,11 @@ class Model(ABC):
                         f"hold; use a load below {breaking * self.drive.driven.pitch_radius:.4g} "
                         f"N.m (the breaking load on the driven pitch radius) or a larger chain")
             return (f"input load.torque = {torque:.6g} N.m is beyond +-{t_max:.4g} N.m: the tight "
-                    f"span would carry {abs(torque) / self.drive.driven.pitch_radius:.4g} N, "
+                    f"span would carry {force:.4g} N, "
                     f"more than {100 * limits.STRAIN_LIMIT:g} % strain of a link of "
                     f"chain.link_stiffness = {self.params['chain.link_stiffness']:g} N/m where "
                     f"the models hold; use a smaller load or chain.link_stiffness >= "
-                    f"{abs(torque) / self.drive.driven.pitch_radius / (limits.STRAIN_LIMIT * self.drive.pitch):.3g} N/m")
+                    f"{force / (limits.STRAIN_LIMIT * self.drive.pitch):.3g} N/m")
         if abs(speed) > w_max:
             return (f"input input_shaft.speed = {speed:.6g} rad/s ({speed / limits.RPM:.6g} rpm)"
                     f" is beyond the {self.name} model's (level {self.level}) limit of "
