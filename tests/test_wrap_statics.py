@@ -325,6 +325,65 @@ def test_the_mode_is_continued_where_the_static_shape_turns_into_the_shafts():
     assert fit.mode == pytest.approx(f3, rel=0.03)
 
 
+def test_with_twice_the_seat_clearance_the_wrap_is_fitted_on_the_chains_mode_not_the_shafts():
+    """xu2010 with twice its seat clearance (the trade study's band): the chain sits deeper in
+    its seats and its static tension falls to about 226 N, and the static condensation's largest
+    share of the driven sprocket moves to the input shaft's mode (both pitch circles moving one
+    way, about 172 Hz), which the wrap's stiffness hardly moves. Fitted on it, levels 1-2 rang
+    at 476 Hz where level 3 rings at 547 Hz (-13 %). The wrap's mode (the pitch circles against
+    each other) is taken where it turns the driven sprocket at all
+    (multibody_statics.WRAP_SHARE), and levels 1-2 then ring with level 3 in both modes: the
+    chain's, read above the driver's own frequency on its shaft, 1.1 sqrt(k_s / J_1), within
+    3 % of level 3's and of the fit's mode; and the shaft's, below 0.9 of it, within 3 %
+    too. One run per level gives both peaks."""
+    from chainmodel.analysis.trade_study import band_overrides
+    from ringdown_check import peak_frequency, ring_run
+    base = load_scene("xu2010", fidelity=1)
+    over = band_overrides(base, "seat_clearance", 2.0)
+    sc = load_scene("xu2010", fidelity=1, **over)
+    fit = wrap_fit(sc.drive, sc.parameters)
+    p = sc.parameters
+    own = math.sqrt(p["input_shaft.stiffness"] / p["driver.inertia"]) / (2.0 * math.pi)
+    chain_band, shaft_band = (1.1 * own, 5000.0), (0.3 * own, 0.9 * own)
+    r3 = ring_run("xu2010", 3, parameters=over)
+    chain3, shaft3 = peak_frequency(r3, chain_band), peak_frequency(r3, shaft_band)
+    assert fit.mode == pytest.approx(chain3, rel=0.03)
+    for level in (1, 2):
+        r = ring_run("xu2010", level, parameters=over, **ON)
+        assert peak_frequency(r, chain_band) == pytest.approx(chain3, rel=0.03)
+        assert peak_frequency(r, shaft_band) == pytest.approx(shaft3, rel=0.03)
+
+
+def test_where_the_shafts_and_the_wraps_modes_mix_the_largest_share_is_kept():
+    """The trade study's 6/9-tooth drive at xu2010's pitch (16 links at the tight distance,
+    400 N, 5 N m at 300 rpm): its static condensation's two modes each keep a large part of
+    their strain energy in the input shaft (about 0.63 in the one whose pitch circles move one
+    way, 0.37 in the other), so neither is the wrap's alone and the fit keeps the largest share
+    (multibody_statics.WRAP_SHAFT). Taking the anti-phase one there, its stiffer wrap could not
+    hold level 3's tooth-period-mean static tension at rest (about 207 N against 400 N at angle
+    0) and levels 1-2 ran about 30 % high on the mean tight span. Checked against level 3: the
+    spans hold the mean of its statics at the fit's four driver positions (solved here), with
+    no fallback, and levels 1-2's mean tight span over the study's steady half within 5 % of
+    level 3's."""
+    from chainmodel.analysis.trade_study import SCENES
+    from chainmodel.models.wrap_statics import fallbacks, tooth_positions
+    spec = next(s for s in SCENES if s.name.startswith("coarse"))
+    sc = spec.scene()
+    fit = wrap_fit(sc.drive, sc.parameters)
+    m3 = sc.with_overrides(fidelity=3).model()
+    held = np.mean([static_state(m3, a).mean_tension for a in tooth_positions(sc.drive)])
+    assert fit.held_tension == pytest.approx(held, rel=1e-3)
+    tights = {}
+    for level in (1, 2, 3):
+        r = chainmodel.simulate(sc.with_overrides(fidelity=level))
+        steady = r.time >= 0.5 * r.time[-1]
+        tights[level] = r["tight_span.tension"][steady].mean()
+        if level < 3:
+            assert not fallbacks(sc.drive, sc.with_overrides(fidelity=level).parameters, level)
+    for level in (1, 2):
+        assert tights[level] == pytest.approx(tights[3], rel=0.05), level
+
+
 @pytest.mark.parametrize("name, tol", [("fine", 0.03), ("C3", 0.06)])
 def test_on_long_sagging_spans_the_mode_is_the_driven_sprockets_not_a_string_mode(name, tol):
     """The 21/63-tooth 16B scene ``fine`` and C3 (0.895 / 0.876 m spans at 500 N): level 3

@@ -59,6 +59,20 @@ __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mod
 #: each other's, both kept; a 16A 13/13 drive's 93.6 Hz mode 0.25 of a 1.82 kHz
 #: roller mode's share, but 7e5 times its response)
 MODE_GATE = 0.5
+#: the least share of the driven sprocket and its seated rollers in a static mode's kinetic
+#: energy at which linearised_modes takes the wrap's mode (the pitch circles moving against
+#: each other) over the shaft's: a span's sag mode, the sprockets nearly at rest, holds 0.002-
+#: 0.02 on the unseen drives without pretension and sometimes moves them against each other
+#: (08B 13/39, 10A 19/38, 10B 11/33, 12B 15/45); xu2010's wrap with twice its seat clearance
+#: holds 0.10 or more. Any value in 0.02-0.1 gives the same 190 fits of
+#: docs/scripts/mode_picker_fits.py; 0 took the sag mode on those four drives
+WRAP_SHARE = 0.05
+#: ... and at most this share of its strain energy in the input shaft: the wrap's mode clearly
+#: apart from the shaft's (xu2010 and its band: 0.08-0.19). The 6/9-tooth drive of the trade
+#: study mixes the two (0.37 in its anti-phase mode, 0.63 in the other); taken there, the wrap
+#: fit on it could not hold level 3's tooth-period-mean static tension and its levels 0-2 ran
+#: 29-36 % high on the mean spans (1-3 % on the largest share; docs/reduced_models.md)
+WRAP_SHAFT = 0.25
 #: modes whose frequencies differ by at most this fraction count as one (_clusters): xu2010 at
 #: its tight centre distance splits its two spans' string modes by 0.06-0.35 % near 170 Hz, and
 #: their shapes (and with them each one's share) turn within their plane from one pretension or
@@ -511,8 +525,10 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     Which mode: first every roller condensed statically onto the sprocket rotations (Guyan:
     each roller follows its static shape, T = [I; -K_rr^-1 K_rs], and carries its mass
     through it); of its modes (two where the driver is free) the one with the largest share of
-    its kinetic energy in the driven sprocket and its seated rollers. That is the static
-    wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
+    its kinetic energy in the driven sprocket and its seated rollers; where the driver is free,
+    the one whose pitch circles move against each other (the wrap's mode of a two-inertia
+    system on a shaft, not the shaft's) if its share is at least ``WRAP_SHARE`` and at most
+    ``WRAP_SHAFT`` of its strain energy is in the shaft. That is the static wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
     turn with their sprocket as levels 1-2's chain inertia puts them on it - and the span
     rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
     they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
@@ -597,6 +613,20 @@ def linearised_modes(model, solution: StaticSolution):
     j = int(np.argmax(share_s))
     if share_s[j] <= 0.0:
         raise ValueError("level 3's static condensation has no positive driven-sprocket mode")
+    if sprockets.size == 2:
+        # the driver on its shaft's spring: a two-inertia system on a shaft has the shaft's
+        # mode (both pitch circles moving one way, the chain carried along) and the wrap's
+        # (against each other, the chain between them stretched). The span stiffness levels
+        # 1-2 fit hardly moves the shaft's (d ln omega / d ln K is half the chain's share of
+        # the strain energy), so where a mode is clearly the wrap's it is taken, though the
+        # shaft's may hold the larger share (xu2010 with twice its seat clearance: 0.10
+        # against 0.31)
+        shaft = p["input_shaft.stiffness"] * phi_s[0] ** 2
+        strain = np.einsum("ij,ik,kj->j", phi_s, k, phi_s)
+        wrap = np.flatnonzero((share_s >= WRAP_SHARE) & (phi_s[0] * phi_s[1] < 0.0)
+                              & (shaft <= WRAP_SHAFT * strain))
+        if wrap.size:
+            j = int(wrap[np.argmax(share_s[wrap])])
     lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
     return lam, phi, mass, driven, phi_s[:, j], math.sqrt(lam_s[j])
 
