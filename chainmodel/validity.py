@@ -211,6 +211,8 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "wrap_statics_unavailable": "torsional.wrap_statics not honoured",
           "wrap_statics_fallback": "torsional.wrap_statics on a weaker fit",
           "slack_span_sag": "slack span below level 3's on a chain hanging on its sag",
+          "torsional_mode_moves": "level 3's torsional mode moving over a tooth beyond one "
+                                  "mode's reach",
           "implausible_value": "a chain value far from its ISO 606 chain's",
           "hanging_spans": "spans hanging along their length at level 1 or 2",
           "span_vibration": "level 2's spans vibrating beyond its string model",
@@ -310,7 +312,8 @@ def _unit(name: str) -> str:
 
 def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
                            level: int | None) -> list[Problem]:
-    from .models.wrap_statics import fallbacks, slack_shortfall, span_ends, unavailable
+    from .models.wrap_statics import (fallbacks, mode_spread, slack_shortfall, span_ends,
+                                      unavailable)
     if not params.get("torsional.wrap_statics"):
         return []
     if level in (0, 1, 2):
@@ -322,6 +325,9 @@ def _wrap_statics_problems(drive: Drive, params: Mapping[str, Any],
         short = slack_shortfall(drive, params, level)
         if short is not None:
             found.append(Problem("slack_span_sag", f"torsional.wrap_statics: {short}"))
+        spread = mode_spread(drive, params, level)
+        if spread is not None:
+            found.append(Problem("torsional_mode_moves", f"torsional.wrap_statics: {spread}"))
         return found
     return [Problem("wrap_statics_unavailable", (
         f"torsional.wrap_statics = true was not honoured: level 3's statics give this drive "

@@ -751,6 +751,34 @@ def test_a_chain_hanging_on_its_sag_logs_the_slack_span_warning(chaindrive_fmu_d
         s.free()
 
 
+def test_a_mode_moving_over_a_tooth_is_logged_as_a_warning(chaindrive_fmu_dir):
+    """The trade study's 6/9-tooth drive set through the FMU's parameters at level 1: level
+    3's driven-sprocket mode moves over a tooth beyond what one mode stands for, and the FMU
+    logs chainmodel.validity's torsional_mode_moves as fmi2Warning at initialization, as the
+    library's warnings (tests/test_mode_over_tooth.py checks the claim in the runs)."""
+    from test_mode_over_tooth import COARSE
+    from chainmodel.scene import load_scene
+    sc = load_scene("xu2010", fidelity=1, **COARSE)
+    s = Slave(chaindrive_fmu_dir)
+    try:
+        values = {}
+        for name, value in sc.parameters.items():
+            v = s.var.get(name)
+            if v is None or v.causality != "parameter" or v.type not in ("Real", "Integer"):
+                continue
+            cast = float if v.type == "Real" else int
+            if value is not None and cast(v.start) != cast(value):
+                values[name] = cast(value)
+        assert {"drive.driver_teeth", "drive.driven_teeth", "drive.links"} <= set(values)
+        s.set_parameters(values)
+        s.fmu.exitInitializationMode()
+        warned = [m for status, m in s.log.messages
+                  if status == 1 and "moves over a driver tooth" in m]
+        assert len(warned) == 1 and "Run level 3" in warned[0]
+    finally:
+        s.free()
+
+
 def test_a_chain_value_far_from_its_chain_is_logged_as_a_warning(chaindrive_fmu_dir):
     """A link mass typed in grams set through the FMU's parameters (xu2010's 15.875 mm pitch,
     whose ISO 606 chains have about 0.02 kg per link) is logged as fmi2Warning at

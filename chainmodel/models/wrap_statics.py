@@ -18,7 +18,8 @@ at angle 0):
   rest, its seated rollers condensed onto their sprockets, its span rollers' inertia kept),
   its mean over ``ANGLES`` driver positions in a tooth period (level 3's static tension and
   with it its mode move over a tooth: C1 364-551 N and 24.5-25.3 Hz; levels 1-2's
-  tooth-period-mean link counts see the mean; :func:`_tooth_mean_mode`), and
+  tooth-period-mean link counts see the mean; :func:`_tooth_modes`; where it lies more than
+  ``MODE_SPREAD`` from that mean at a position, levels 1-2 warn, :func:`mode_spread`), and
   level 1's R_o^2 sum_spans s_s / (n_s / k + c) = K_m gives c (n_s the tooth-period-mean link
   counts level 1 uses, s_s the floor's slope dT / dT_raw at rest). Levels 1-2 then refit the
   stiffness, floor and f with it, to their own linear mode at rest
@@ -78,7 +79,7 @@ __all__ = ["WrapFit", "wrap_fit", "tooth_positions", "span_ends", "static_span_t
            "LOAD_STEP", "SLACK_SHARE", "SHORTFALL", "slack_shortfall", "sag_tension",
            "unavailable", "honoured", "fallbacks",
            "note_fallback", "parameters_key", "STATIC_IGNORED", "END_RATIO",
-           "span_elastic_compliance", "raw_tension"]
+           "span_elastic_compliance", "raw_tension", "mode_spread", "MODE_SPREAD"]
 
 #: the secant's load step dM / (T_0 R_o)
 LOAD_STEP = 0.2
@@ -127,7 +128,9 @@ class WrapFit:
     [N], level 3's static tension's mean over ``ANGLES`` driver positions in a tooth period,
     which the law (c, f, a) holds at rest (T_0 where a position has no equilibrium or the
     mean gives no plausible ends); split_difference: the tension difference [N] under which
-    level 3's slack span ``loaded_slack`` was taken."""
+    level 3's slack span ``loaded_slack`` was taken; modes: level 3's linear driven-sprocket
+    mode [Hz] at each driver position ``mode`` is the mean of (angle 0 first; empty where
+    K_m is the secant)."""
     compliance: float
     free_length: float
     static_tension: float
@@ -141,6 +144,7 @@ class WrapFit:
     mode: float = float("nan")
     held_tension: float = float("nan")
     split_difference: float = float("nan")
+    modes: tuple[float, ...] = ()
 
 
 #: parameters no fit reads: the statics and the linear modes are taken at zero velocity and
@@ -241,11 +245,13 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
             slack3 = float(np.mean(slacks))
         except ValueError:   # no loaded equilibrium found: no floor
             slack3 = None
+    omegas = []
     try:
-        omega, short = _tooth_mean_mode(model, rests)
+        omegas = _tooth_modes(model, rests)
+        omega, short = float(np.mean(omegas)), ANGLES - len(omegas)
         km = modal_stiffness(drive, p3, omega)
     except ValueError as exc:   # no mode to take (singular roller stiffness): the secant
-        omega, km = float("nan"), k3
+        omegas, omega, km = [], float("nan"), k3
         _FELL_BACK[(None,) + key] = (
             f"level 3's linear driven-sprocket mode was not found ({exc}), so levels 1-2 take "
             f"the wrap stiffness from its statics' secant K_3 = {k3:.4g} N m/rad, which is "
@@ -285,7 +291,7 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
         _FELL_BACK[("held",) + key] = held_note
     return WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
                    float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi),
-                   t_held, dt)
+                   t_held, dt, tuple(w / (2.0 * math.pi) for w in omegas))
 
 
 def tooth_positions(drive: Drive) -> np.ndarray:
@@ -294,11 +300,11 @@ def tooth_positions(drive: Drive) -> np.ndarray:
     return 2.0 * math.pi / drive.n_driver * np.arange(ANGLES) / ANGLES
 
 
-def _tooth_mean_mode(model, rests) -> tuple[float, int]:
-    """(omega [rad/s], positions missed): the mean of level 3's linear driven-sprocket mode
-    (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) over the driver
-    positions of ``rests`` and the ones of ``ANGLES`` with no equilibrium; ValueError where
-    the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
+def _tooth_modes(model, rests) -> list[float]:
+    """[omega, ...] [rad/s]: level 3's linear driven-sprocket mode
+    (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) at the driver
+    positions of ``rests`` where it has one (their mean is the fit's; ``ANGLES`` minus their
+    count the positions missed); ValueError where the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
     stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
     see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
     those with a comparable response or share in the driven sprocket (``near``)."""
@@ -310,7 +316,7 @@ def _tooth_mean_mode(model, rests) -> tuple[float, int]:
             omegas.append(linear_driven_modes(model, rest, near=omega)[0])
         except ValueError:
             pass
-    return float(np.mean(omegas)), ANGLES - len(omegas)
+    return omegas
 
 
 def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
@@ -387,6 +393,44 @@ def slack_shortfall(drive: Drive, params: Mapping[str, Any], level: int | None) 
         f"-59 %, level 2 -7 %). Take span tensions from level 2 or 3, or run level 1 on the "
         f"seat ladder (torsional.wrap_statics = false: its spans keep their quasi-static sag, "
         f"and its torsional mode is that of the ladder's seats)")
+
+
+#: levels 1-2 warn where level 3's driven-sprocket mode at some driver position of the fit lies
+#: more than this fraction from the tooth-period mean they carry (module docstring)
+MODE_SPREAD = 0.10
+
+
+def mode_spread(drive: Drive, params: Mapping[str, Any], level: int | None) -> str | None:
+    """Why levels 1-2's torsional mode may be off level 3's at a driver position, or None.
+
+    Levels 1-2 hold one wrap stiffness, fitted so that their mode is the mean of level 3's
+    over ``ANGLES`` driver positions in a tooth period (:func:`wrap_fit`). Where level 3's
+    mode at some position lies more than ``MODE_SPREAD`` from that mean, its chain is a
+    different spring from one part of a tooth to the next (few teeth, a short chain) and one
+    mode does not stand for it: the trade study's 6/9-tooth drive, 72-236 Hz over a tooth,
+    rings at 137 Hz at levels 1-2 against level 3's 233 Hz after a sudden start to 5 rpm;
+    seed 004's A1, 3.7-21.9 Hz, at 13.9 against 21.0 Hz from 1 rpm (docs/reduced_models.md,
+    "Level 3's mode over a tooth"). chainmodel.validity turns it into a warning (code
+    ``torsional_mode_moves``)."""
+    if level not in (1, 2):
+        return None
+    fit = wrap_fit(drive, params)
+    if len(fit.modes) < 2 or not fit.mode > 0.0:
+        return None
+    lo, hi = min(fit.modes), max(fit.modes)
+    off = max(fit.mode / lo - 1.0, 1.0 - fit.mode / hi)
+    if off <= MODE_SPREAD:
+        return None
+    how = (f"{100.0 * off:.0f} % off level 3's" if off < 1.0 else
+           f"off level 3's by a factor of {1.0 + off:.2g}")
+    return (f"level 3's driven-sprocket mode at rest moves over a driver tooth from {lo:.4g} to "
+            f"{hi:.4g} Hz (linearised at {len(fit.modes)} driver positions), and level {level} "
+            f"carries their mean, {fit.mode:.4g} Hz, as one mode: at a position its torsional "
+            f"mode is {how}, and its torsional response (a "
+            f"resonance's speed, the ring after a step) may be off by as much or more (the "
+            f"trade study's 6/9-tooth drive, 72-236 Hz over a tooth: 137 Hz against level 3's "
+            f"233 Hz). Run level 3 where the torsional mode matters; more teeth or a longer "
+            f"chain even the wrap out over a tooth")
 
 
 def span_elastic_compliance(drive: Drive, params: Mapping[str, Any]) -> float:
