@@ -609,7 +609,7 @@ def test_the_fit_reads_no_damper_and_holds_the_scenes_static_tension():
     def fresh(params):
         W._CACHE.clear()
         fit = wrap_fit(sc.drive, params)
-        return np.array([v for k, v in vars(fit).items() if k != "solves_wall"])
+        return np.hstack([v for k, v in vars(fit).items() if k != "solves_wall"])
 
     dampers = [n for n in W.STATIC_IGNORED if n.endswith("damping") and n in sc.parameters
                and isinstance(sc.parameters[n], float)]
