@@ -719,6 +719,28 @@ def test_fidelity_auto_warns_when_its_target_is_not_met(chaindrive_fmu_dir):
     assert seen == {False: True, True: True}   # both kinds were exercised
 
 
+def _initialization_warnings(fmu_dir, scene, needle, required, extra=None) -> list[str]:
+    """The fmi2Warning messages holding ``needle`` that the FMU logs at initialization with
+    ``scene``'s Real and Integer parameters set where they differ from its starts (``required``
+    among them) and ``extra`` on top."""
+    s = Slave(fmu_dir)
+    try:
+        values = {}
+        for name, value in scene.parameters.items():
+            v = s.var.get(name)
+            if v is None or v.causality != "parameter" or v.type not in ("Real", "Integer"):
+                continue
+            cast = float if v.type == "Real" else int
+            if value is not None and cast(v.start) != cast(value):
+                values[name] = cast(value)
+        assert required <= set(values)
+        s.set_parameters(dict(values, **(extra or {})))
+        s.fmu.exitInitializationMode()
+        return [m for status, m in s.log.messages if status == 1 and needle in m]
+    finally:
+        s.free()
+
+
 def test_a_chain_hanging_on_its_sag_logs_the_slack_span_warning(chaindrive_fmu_dir, tmp_path):
     """The FMU logs levels 0-1's slack_span_sag warning (chainmodel.validity) as fmi2Warning at
     initialization, for the 08B 13/39 drive with no pretension set through its parameters and
@@ -729,26 +751,10 @@ def test_a_chain_hanging_on_its_sag_logs_the_slack_span_warning(chaindrive_fmu_d
     from test_wrap_statics import _SAGGING_08B
     path = tmp_path / "sagging.toml"
     path.write_text(_SAGGING_08B)
-    sc = load_scene(str(path), fidelity=1)
-    s = Slave(chaindrive_fmu_dir)
-    try:
-        values = {}
-        for name, value in sc.parameters.items():
-            v = s.var.get(name)
-            if v is None or v.causality != "parameter" or v.type not in ("Real", "Integer"):
-                continue
-            cast = float if v.type == "Real" else int
-            if value is not None and cast(v.start) != cast(value):
-                values[name] = cast(value)
-        assert {"drive.links", "drive.pitch", "chain.link_stiffness"} <= set(values)
-        values["torsional.sag_lag"] = False
-        s.set_parameters(values)
-        s.fmu.exitInitializationMode()
-        warned = [m for status, m in s.log.messages
-                  if status == 1 and "falls short of level 3's" in m]
-        assert len(warned) == 1 and "level 2 or 3" in warned[0]
-    finally:
-        s.free()
+    warned = _initialization_warnings(
+        chaindrive_fmu_dir, load_scene(str(path), fidelity=1), "falls short of level 3's",
+        {"drive.links", "drive.pitch", "chain.link_stiffness"}, {"torsional.sag_lag": False})
+    assert len(warned) == 1 and "level 2 or 3" in warned[0]
 
 
 def test_a_mode_moving_over_a_tooth_is_logged_as_a_warning(chaindrive_fmu_dir):
@@ -758,25 +764,10 @@ def test_a_mode_moving_over_a_tooth_is_logged_as_a_warning(chaindrive_fmu_dir):
     library's warnings (tests/test_mode_over_tooth.py checks the claim in the runs)."""
     from test_mode_over_tooth import COARSE
     from chainmodel.scene import load_scene
-    sc = load_scene("xu2010", fidelity=1, **COARSE)
-    s = Slave(chaindrive_fmu_dir)
-    try:
-        values = {}
-        for name, value in sc.parameters.items():
-            v = s.var.get(name)
-            if v is None or v.causality != "parameter" or v.type not in ("Real", "Integer"):
-                continue
-            cast = float if v.type == "Real" else int
-            if value is not None and cast(v.start) != cast(value):
-                values[name] = cast(value)
-        assert {"drive.driver_teeth", "drive.driven_teeth", "drive.links"} <= set(values)
-        s.set_parameters(values)
-        s.fmu.exitInitializationMode()
-        warned = [m for status, m in s.log.messages
-                  if status == 1 and "moves over a driver tooth" in m]
-        assert len(warned) == 1 and "Run level 3" in warned[0]
-    finally:
-        s.free()
+    warned = _initialization_warnings(
+        chaindrive_fmu_dir, load_scene("xu2010", fidelity=1, **COARSE),
+        "moves over a driver tooth", {"drive.driver_teeth", "drive.driven_teeth", "drive.links"})
+    assert len(warned) == 1 and "Run level 3" in warned[0]
 
 
 def test_a_chain_value_far_from_its_chain_is_logged_as_a_warning(chaindrive_fmu_dir):

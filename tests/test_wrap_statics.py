@@ -314,15 +314,20 @@ def test_the_mode_is_continued_where_the_static_shape_turns_into_the_shafts():
     1.1 sqrt(k_s / J_1) (the shaft mode, 175 Hz, rings 26 times stronger there; levels 1-2 carry
     their own). A gate on the response alone at every position took the shaft mode at that
     position and fitted 464 Hz, -16 %."""
-    from chainmodel.analysis.trade_study import band_overrides
-    base = load_scene("xu2010", fidelity=1)
-    over = band_overrides(base, "contact.stiffness", 0.5)
-    sc = load_scene("xu2010", fidelity=1, **over)
-    fit = wrap_fit(sc.drive, sc.parameters)
-    p = sc.parameters
-    shaft = math.sqrt(p["input_shaft.stiffness"] / p["driver.inertia"]) / (2.0 * math.pi)
+    over, fit, shaft = _xu2010_band("contact.stiffness", 0.5)
     f3 = ring("xu2010", 3, (1.1 * shaft, 5000.0), parameters=over)
     assert fit.mode == pytest.approx(f3, rel=0.03)
+
+
+def _xu2010_band(what, factor):
+    """(overrides, wrap fit, the driver's own frequency on its shaft sqrt(k_s / J_1) [Hz]) of
+    xu2010 with the trade study's uncertain value ``what`` scaled by ``factor``."""
+    from chainmodel.analysis.trade_study import band_overrides
+    over = band_overrides(load_scene("xu2010", fidelity=1), what, factor)
+    sc = load_scene("xu2010", fidelity=1, **over)
+    p = sc.parameters
+    own = math.sqrt(p["input_shaft.stiffness"] / p["driver.inertia"]) / (2.0 * math.pi)
+    return over, wrap_fit(sc.drive, p), own
 
 
 def test_with_twice_the_seat_clearance_the_wrap_is_fitted_on_the_chains_mode_not_the_shafts():
@@ -336,14 +341,8 @@ def test_with_twice_the_seat_clearance_the_wrap_is_fitted_on_the_chains_mode_not
     chain's, read above the driver's own frequency on its shaft, 1.1 sqrt(k_s / J_1), within
     3 % of level 3's and of the fit's mode; and the shaft's, below 0.9 of it, within 3 %
     too. One run per level gives both peaks."""
-    from chainmodel.analysis.trade_study import band_overrides
     from ringdown_check import peak_frequency, ring_run
-    base = load_scene("xu2010", fidelity=1)
-    over = band_overrides(base, "seat_clearance", 2.0)
-    sc = load_scene("xu2010", fidelity=1, **over)
-    fit = wrap_fit(sc.drive, sc.parameters)
-    p = sc.parameters
-    own = math.sqrt(p["input_shaft.stiffness"] / p["driver.inertia"]) / (2.0 * math.pi)
+    over, fit, own = _xu2010_band("seat_clearance", 2.0)
     chain_band, shaft_band = (1.1 * own, 5000.0), (0.3 * own, 0.9 * own)
     r3 = ring_run("xu2010", 3, parameters=over)
     chain3, shaft3 = peak_frequency(r3, chain_band), peak_frequency(r3, shaft_band)
