@@ -27,6 +27,10 @@ a flexible one: the two-inertia system with the shaft spring, the driven sprocke
     python docs/scripts/ringdown.py loaded         # xu2010 under its 43.2 N m: level 3 and
                                                    # level 1 on the wrap and on the seat
                                                    # ladder (a few seconds)
+    python docs/scripts/ringdown.py fan            # the 08B fan without pretension at its
+                                                   # seat clearance x1 and x2: the fit's linear
+                                                   # mode against levels 1-3's ring at 0.5, 1
+                                                   # and 5 rpm (about 15 s)
     python docs/scripts/ringdown.py clearance      # xu2010 with its seat clearance x2: level
                                                    # 3's ring against its linear modes at rest
                                                    # (about 15 s)
@@ -260,7 +264,32 @@ def loaded(load=43.2):
         print(f"{label:26s} {f:8.1f} Hz {100 * (f / f3 - 1):+6.1f}%", flush=True)
 
 
+def fan():
+    """The 08B fan without pretension (examples/scenes/08b_fan_1500rpm.toml, static_tension
+    None) at its seat clearance x1 and x2: wrap_fit's linear mode at rest against the strongest
+    peak of each level's ring-down in 10 Hz-5 kHz after a sudden start to 0.5, 1 and 5 rpm."""
+    from chainmodel.analysis.trade_study import band_overrides
+    from chainmodel.models.wrap_statics import wrap_fit
+    path = str(Path(__file__).resolve().parents[2] / "examples" / "scenes" /
+               "08b_fan_1500rpm.toml")
+    base = load_scene(path, fidelity=1, static_tension=None)
+    print("08B fan without pretension: the fit's linear mode at rest and each level's ring-down "
+          "[Hz] (strongest peak in 10 Hz-5 kHz) at 0.5 / 1 / 5 rpm")
+    for factor in (1.0, 2.0):
+        over = band_overrides(base, "seat_clearance", factor)
+        sc = load_scene(path, fidelity=1, static_tension=None, **over)
+        mode = wrap_fit(sc.drive, sc.parameters).mode
+        cells = []
+        for level in (3, 1, 2):
+            rings = [ring(path, level, (10.0, 5000.0), rpm, static_tension=None,
+                          parameters=over)[0] for rpm in (0.5, 1.0, 5.0)]
+            cells.append(f"level {level} " + " / ".join(f"{f:.1f}" for f in rings))
+        print(f"seat clearance x{factor:g}: fit {mode:.2f}; " + "; ".join(cells), flush=True)
+
+
 def main(argv):
+    if argv[1:2] == ["fan"]:
+        return fan()
     if argv[1:2] == ["loaded"]:
         return loaded()
     if argv[1:2] == ["modes"]:
