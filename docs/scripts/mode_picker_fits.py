@@ -2,7 +2,8 @@
 refused, on 190 cases: the preset scenes; the example scenes and the unseen drives
 (docs/scripts/unseen_drives/) as written and with no pretension; each at its values and at x0.5
 and x2 of contact stiffness and of seat clearance (trade_study.band_overrides). Fourteenth
-session of issue 21, docs/reduced_models.md "The gate on the response" and "xu2010 with twice its seat clearance: settled in the twenty-sixth session".
+session of issue 21, docs/reduced_models.md "The gate on the response" and "xu2010 with twice
+its seat clearance: settled in the twenty-sixth session".
 
     python docs/scripts/mode_picker_fits.py > now.txt     # about 1 min
     python docs/scripts/mode_picker_fits.py --held        # with the tension the spans hold
