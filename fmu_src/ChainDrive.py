@@ -391,8 +391,9 @@ class ChainDrive(Fmi2Slave):
                  if session.motor_inertia > 0 else math.inf)
         self._real[self._max_step_vr] = h_max if math.isfinite(h_max) else 0.0
         if state is None:   # a new run: its validity checks start afresh
-            self._monitor = self._validity.Monitor(built.drive, params, built.level,
-                                                   self._output_names)
+            self._monitor = self._validity.Monitor(
+                built.drive, params, built.level, self._output_names,
+                started_unloaded=bool(built.stepper.model.start_fallback))
         self._stepper, self._model_params = built.stepper, params
         self._params_changed = False
         return built.stepper
