@@ -59,20 +59,15 @@ __all__ = ["StaticSolution", "solve_statics", "static_state", "linear_driven_mod
 #: each other's, both kept; a 16A 13/13 drive's 93.6 Hz mode 0.25 of a 1.82 kHz
 #: roller mode's share, but 7e5 times its response)
 MODE_GATE = 0.5
-#: the least share of the driven sprocket and its seated rollers in a static mode's kinetic
-#: energy at which linearised_modes takes the wrap's mode (the pitch circles moving against
-#: each other) over the shaft's: a span's sag mode, the sprockets nearly at rest, holds 0.002-
-#: 0.02 on the unseen drives without pretension and sometimes moves them against each other
-#: (08B 13/39, 10A 19/38, 10B 11/33, 12B 15/45); xu2010's wrap with twice its seat clearance
-#: holds 0.10 or more. Any value in 0.02-0.1 gives the same 190 fits of
+#: where the driver turns on its input shaft's spring, linearised_modes takes the wrap's static
+#: mode (the pitch circles moving against each other, less of its strain energy in the shaft
+#: than the other mode) where its share of the driven sprocket and its seated rollers in its
+#: kinetic energy is at least this. A span's sag mode, the sprockets nearly at rest, holds
+#: 0.002-0.02 on the unseen drives without pretension and sometimes moves them against each
+#: other by rounding (08B 13/39, 10A 19/38, 10B 11/33, 12B 15/45); xu2010's wrap with twice its
+#: seat clearance holds 0.10 or more. Any value in 0.02-0.1 gives the same 190 fits of
 #: docs/scripts/mode_picker_fits.py; 0 took the sag mode on those four drives
 WRAP_SHARE = 0.05
-#: ... and at most this share of its strain energy in the input shaft: the wrap's mode clearly
-#: apart from the shaft's (xu2010 and its band: 0.08-0.19). The 6/9-tooth drive of the trade
-#: study mixes the two (0.37 in its anti-phase mode, 0.63 in the other); taken there, the wrap
-#: fit on it could not hold level 3's tooth-period-mean static tension and its levels 0-2 ran
-#: 29-36 % high on the mean spans (1-3 % on the largest share; docs/reduced_models.md)
-WRAP_SHAFT = 0.25
 #: modes whose frequencies differ by at most this fraction count as one (_clusters): xu2010 at
 #: its tight centre distance splits its two spans' string modes by 0.06-0.35 % near 170 Hz, and
 #: their shapes (and with them each one's share) turn within their plane from one pretension or
@@ -508,8 +503,8 @@ def _driven_mode(lam, phi, mass, driven: int, ref, near=None) -> float:
     return float(g_omega[gated[np.argmax(g_mac[gated])]])
 
 
-def linear_driven_modes(model, solution: StaticSolution, near: float | None = None
-                        ) -> tuple[float, float]:
+def linear_driven_modes(model, solution: StaticSolution, near: float | None = None,
+                        wrap_first: bool = True) -> tuple[float, float]:
     """(omega, omega_s) [rad/s]: level 3's driven-sprocket mode about a static equilibrium
     ``solution`` (no load), small amplitude, undamped, and its static condensation's mode it
     continues.
@@ -525,10 +520,11 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     Which mode: first every roller condensed statically onto the sprocket rotations (Guyan:
     each roller follows its static shape, T = [I; -K_rr^-1 K_rs], and carries its mass
     through it); of its modes (two where the driver is free) the one with the largest share of
-    its kinetic energy in the driven sprocket and its seated rollers; where the driver is free,
-    the one whose pitch circles move against each other (the wrap's mode of a two-inertia
-    system on a shaft, not the shaft's) if its share is at least ``WRAP_SHARE`` and at most
-    ``WRAP_SHAFT`` of its strain energy is in the shaft. That is the static wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
+    its kinetic energy in the driven sprocket and its seated rollers; where the driver is free
+    (and ``wrap_first``), the wrap's mode of a two-inertia system on a shaft instead if its
+    share is at least ``WRAP_SHARE``: the one whose pitch circles move against each other and
+    which keeps less of its strain energy in the input shaft than the other (the one the span
+    stiffness moves most). That is the static wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
     turn with their sprocket as levels 1-2's chain inertia puts them on it - and the span
     rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
     they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
@@ -563,11 +559,11 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     Checked against level 3's own ring-down on C1, xu2010 and unseen drives
     (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
     static stiffness is singular or no positive mode exists."""
-    lam, phi, mass, driven, ref, omega_s = linearised_modes(model, solution)
+    lam, phi, mass, driven, ref, omega_s = linearised_modes(model, solution, wrap_first)
     return _driven_mode(lam, phi, mass, driven, ref, near), omega_s
 
 
-def linearised_modes(model, solution: StaticSolution):
+def linearised_modes(model, solution: StaticSolution, wrap_first: bool = True):
     """(lam [rad^2/s^2], shapes, mass, driven, ref, omega_s [rad/s]) of
     :func:`linear_driven_modes`: the modes of level 3 linearised at ``solution`` with its
     seated rollers condensed, the coordinates' masses, the driven sprocket's coordinate, the
@@ -613,20 +609,21 @@ def linearised_modes(model, solution: StaticSolution):
     j = int(np.argmax(share_s))
     if share_s[j] <= 0.0:
         raise ValueError("level 3's static condensation has no positive driven-sprocket mode")
-    if sprockets.size == 2:
-        # the driver on its shaft's spring: a two-inertia system on a shaft has the shaft's
-        # mode (both pitch circles moving one way, the chain carried along) and the wrap's
-        # (against each other, the chain between them stretched). The span stiffness levels
-        # 1-2 fit hardly moves the shaft's (d ln omega / d ln K is half the chain's share of
-        # the strain energy), so where a mode is clearly the wrap's it is taken, though the
-        # shaft's may hold the larger share (xu2010 with twice its seat clearance: 0.10
-        # against 0.31)
+    if wrap_first and sprockets.size == 2:
+        # the driver on its shaft's spring: two static modes. The wrap's is the one whose pitch
+        # circles move against each other, the chain between them stretched, where it keeps
+        # less of its strain energy in the shaft than the other (with a shaft stiffer than the
+        # chain that mode is the driver rattling on its shaft); the span stiffness levels 1-2
+        # fit moves it most, so it is taken though the other may hold the larger share (xu2010
+        # with twice its seat clearance: 0.10 against 0.31)
         shaft = p["input_shaft.stiffness"] * phi_s[0] ** 2
         strain = np.einsum("ij,ik,kj->j", phi_s, k, phi_s)
-        wrap = np.flatnonzero((share_s >= WRAP_SHARE) & (phi_s[0] * phi_s[1] < 0.0)
-                              & (shaft <= WRAP_SHAFT * strain))
-        if wrap.size:
-            j = int(wrap[np.argmax(share_s[wrap])])
+        if lam_s.size == 2 and np.all(strain > 0.0):
+            in_shaft = shaft / strain
+            wrap = np.flatnonzero((share_s >= WRAP_SHARE) & (phi_s[0] * phi_s[1] < 0.0)
+                                  & (in_shaft < in_shaft[::-1]))
+            if wrap.size:
+                j = int(wrap[0])
     lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
     return lam, phi, mass, driven, phi_s[:, j], math.sqrt(lam_s[j])
 

@@ -130,7 +130,8 @@ class WrapFit:
     mean gives no plausible ends); split_difference: the tension difference [N] under which
     level 3's slack span ``loaded_slack`` was taken; modes: level 3's linear driven-sprocket
     mode [Hz] at each driver position ``mode`` is the mean of (angle 0 first; empty where
-    K_m is the secant)."""
+    K_m is the secant); tensions: level 3's static tension [N] at each driver position solved
+    (angle 0 first)."""
     compliance: float
     free_length: float
     static_tension: float
@@ -145,6 +146,7 @@ class WrapFit:
     held_tension: float = float("nan")
     split_difference: float = float("nan")
     modes: tuple[float, ...] = ()
+    tensions: tuple[float, ...] = ()
 
 
 #: parameters no fit reads: the statics and the linear modes are taken at zero velocity and
@@ -272,17 +274,34 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
     # the slack span under the fit's load hangs on its sag in level 3: the floor is fitted
     # over the spans' parabola sag, so it stands only for what the sag does not hold
     sags = SG.span_terms(drive, p3)
+    _FELL_BACK.pop(("wrap",) + key, None)
+    failed = other = None
     try:
         c, f, b = _ends(drive, p3, t_held, slack3, km, dt, sags)
-    except ValueError as exc:
+    except ValueError as err:
+        failed = err
+        other = _other_mode(model, rests, drive, p3, omegas, t_held, slack3, dt, sags)
+    if other is not None:
+        # the wrap's mode needs ends the spans cannot give at the held tension: the mode with
+        # the larger share, which they can, holds level 3's static tension (item 4 first)
+        _FELL_BACK[("wrap",) + key] = (
+            f"level 3's wrap mode at rest ({omega / (2.0 * math.pi):.4g} Hz, the sprockets' "
+            f"pitch circles moving against each other) needs a wrap stiffer than "
+            f"the spans give at level 3's tooth-period-mean static tension ({t_held:.4g} N), so "
+            f"levels 1-2 are fitted to the mode with the larger share of the driven sprocket "
+            f"({other[1] / (2.0 * math.pi):.4g} Hz) and hold that tension: their torsional mode "
+            f"may be far off level 3's (the trade study's 6/9-tooth drive: 137 Hz against level "
+            f"3's 233 Hz); run level 3 where the torsional mode matters")
+        omegas, omega, km, (c, f, b) = other
+    elif failed is not None:
         if t_held == t0:
-            raise
+            raise failed
         # the tooth-period mean leaves the spans too soft at rest for level 3's mode (a floor
         # fitted under a low mean): the ends hold the angle-0 tension, as before the mean
         c, f, b = _ends(drive, p3, t0, slack3, km, dt, sags)
         held_note = (f"levels 0-2's spans hold level 3's static tension at driver angle 0 "
                      f"({t0:.4g} N), not its tooth-period mean ({t_held:.4g} N): on the mean "
-                     f"{exc} (their running span means then sit off level 3's by the "
+                     f"{failed} (their running span means then sit off level 3's by the "
                      f"difference)")
         t_held = t0
     if held_note is None:
@@ -291,7 +310,25 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
         _FELL_BACK[("held",) + key] = held_note
     return WrapFit(c, f, t0, k3, rest.tension_upper, rest.tension_lower, wall, b,
                    float("nan") if slack3 is None else slack3, km, omega / (2.0 * math.pi),
-                   t_held, dt, tuple(w / (2.0 * math.pi) for w in omegas))
+                   t_held, dt, tuple(w / (2.0 * math.pi) for w in omegas),
+                   tuple(float(r.mean_tension) for r in rests))
+
+
+def _other_mode(model, rests, drive, p3, omegas, t_held, slack3, dt, sags):
+    """(omegas, omega, K_m, ends) of level 3's mode picked by the larger share of the driven
+    sprocket alone (multibody_statics.linearised_modes with ``wrap_first`` off), where it is
+    another mode than ``omegas`` and the ends hold ``t_held`` on it; else None."""
+    if not omegas:
+        return None
+    try:
+        other = _tooth_modes(model, rests, wrap_first=False)
+        if abs(np.mean(other) / np.mean(omegas) - 1.0) < 1e-9:
+            return None
+        omega = float(np.mean(other))
+        km = modal_stiffness(drive, p3, omega)
+        return other, omega, km, _ends(drive, p3, t_held, slack3, km, dt, sags)
+    except ValueError:
+        return None
 
 
 def tooth_positions(drive: Drive) -> np.ndarray:
@@ -300,20 +337,22 @@ def tooth_positions(drive: Drive) -> np.ndarray:
     return 2.0 * math.pi / drive.n_driver * np.arange(ANGLES) / ANGLES
 
 
-def _tooth_modes(model, rests) -> list[float]:
+def _tooth_modes(model, rests, wrap_first: bool = True) -> list[float]:
     """[omega, ...] [rad/s]: level 3's linear driven-sprocket mode
     (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) at the driver
     positions of ``rests`` where it has one (their mean is the fit's; ``ANGLES`` minus their
-    count the positions missed); ValueError where the first position (angle 0) has no mode. Level 3's static tension, and with it its wrap's
-    stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
+    count the positions missed), picked with ``wrap_first`` as linearised_modes says; ValueError
+    where the first position (angle 0) has no mode. Level 3's static tension, and with it its
+    wrap's stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
     see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
     those with a comparable response or share in the driven sprocket (``near``)."""
     from .multibody_statics import linear_driven_modes
-    omega = linear_driven_modes(model, rests[0])[0]
+    omega = linear_driven_modes(model, rests[0], wrap_first=wrap_first)[0]
     omegas = [omega]
     for rest in rests[1:]:
         try:
-            omegas.append(linear_driven_modes(model, rest, near=omega)[0])
+            omegas.append(linear_driven_modes(model, rest, near=omega,
+                                              wrap_first=wrap_first)[0])
         except ValueError:
             pass
     return omegas
@@ -407,7 +446,9 @@ def mode_spread(drive: Drive, params: Mapping[str, Any], level: int | None) -> s
     over ``ANGLES`` driver positions in a tooth period (:func:`wrap_fit`). Where level 3's
     mode at some position lies more than ``MODE_SPREAD`` from that mean, its chain is a
     different spring from one part of a tooth to the next (few teeth, a short chain) and one
-    mode does not stand for it: the trade study's 6/9-tooth drive, 72-236 Hz over a tooth,
+    mode does not stand for it (its static tension swings with the chain's path length over
+    the tooth: an audit's 7/7 10B drive, 9-1206 N with 20 links, 444-457 N with 21, spans of a
+    whole number of pitches): the trade study's 6/9-tooth drive, 72-236 Hz over a tooth,
     rings at 137 Hz at levels 1-2 against level 3's 233 Hz after a sudden start to 5 rpm;
     seed 004's A1, 3.7-21.9 Hz, at 13.9 against 21.0 Hz from 1 rpm (docs/reduced_models.md,
     "Level 3's mode over a tooth"). chainmodel.validity turns it into a warning (code
@@ -429,8 +470,12 @@ def mode_spread(drive: Drive, params: Mapping[str, Any], level: int | None) -> s
             f"mode is {how}, and its torsional response (a "
             f"resonance's speed, the ring after a step) may be off by as much or more (the "
             f"trade study's 6/9-tooth drive, 72-236 Hz over a tooth: 137 Hz against level 3's "
-            f"233 Hz). Run level 3 where the torsional mode matters; more teeth or a longer "
-            f"chain even the wrap out over a tooth")
+            f"233 Hz). Level 3's static tension moves from {min(fit.tensions):.4g} to "
+            f"{max(fit.tensions):.4g} N over the same tooth: the chain's path length changes "
+            f"with the driver's position. Run level 3 where the torsional mode matters; a centre "
+            f"distance that keeps the path length over a tooth (on equal sprockets, spans of a "
+            f"whole number of pitches), more teeth on the small sprocket or a tensioner evens "
+            f"the wrap out")
 
 
 def span_elastic_compliance(drive: Drive, params: Mapping[str, Any]) -> float:
@@ -666,6 +711,8 @@ def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None)
         return found
     if (None,) + key in _FELL_BACK:
         found.insert(0, _FELL_BACK[(None,) + key])
+    if ("wrap",) + key in _FELL_BACK:
+        found.append(_FELL_BACK[("wrap",) + key])
     own = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
     if level is not None and own in _FELL_BACK:
         found.append(_FELL_BACK[own])
