@@ -504,7 +504,8 @@ def _driven_mode(lam, phi, mass, driven: int, ref, near=None) -> float:
 
 
 def linear_driven_modes(model, solution: StaticSolution, near: float | None = None,
-                        wrap_first: bool = True) -> tuple[float, float]:
+                        wrap_first: bool = True, choice: list | None = None
+                        ) -> tuple[float, float]:
     """(omega, omega_s) [rad/s]: level 3's driven-sprocket mode about a static equilibrium
     ``solution`` (no load), small amplitude, undamped, and its static condensation's mode it
     continues.
@@ -524,7 +525,8 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     (and ``wrap_first``), the wrap's mode of a two-inertia system on a shaft instead if its
     share is at least ``WRAP_SHARE``: the one whose pitch circles move against each other and
     which keeps less of its strain energy in the input shaft than the other (the one the span
-    stiffness moves most). That is the static wrap. Then only the rollers seated on a sprocket (in contact at rest) condensed - they
+    stiffness moves most). That is the static wrap. ``choice``: a list to which whether the
+    wrap's mode was taken is appended (driver free only). Then only the rollers seated on a sprocket (in contact at rest) condensed - they
     turn with their sprocket as levels 1-2's chain inertia puts them on it - and the span
     rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
     they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
@@ -559,11 +561,12 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     Checked against level 3's own ring-down on C1, xu2010 and unseen drives
     (tests/test_wrap_statics.py, docs/reduced_models.md). Raises ValueError where the rollers'
     static stiffness is singular or no positive mode exists."""
-    lam, phi, mass, driven, ref, omega_s = linearised_modes(model, solution, wrap_first)
+    lam, phi, mass, driven, ref, omega_s = linearised_modes(model, solution, wrap_first, choice)
     return _driven_mode(lam, phi, mass, driven, ref, near), omega_s
 
 
-def linearised_modes(model, solution: StaticSolution, wrap_first: bool = True):
+def linearised_modes(model, solution: StaticSolution, wrap_first: bool = True,
+                     choice: list | None = None):
     """(lam [rad^2/s^2], shapes, mass, driven, ref, omega_s [rad/s]) of
     :func:`linear_driven_modes`: the modes of level 3 linearised at ``solution`` with its
     seated rollers condensed, the coordinates' masses, the driven sprocket's coordinate, the
@@ -624,6 +627,8 @@ def linearised_modes(model, solution: StaticSolution, wrap_first: bool = True):
                                   & (in_shaft < in_shaft[::-1]))
             if wrap.size:
                 j = int(wrap[0])
+            if choice is not None:
+                choice.append(bool(wrap.size))
     lam, phi = _condensed_modes(k, mass, np.concatenate([sprockets, spans]))
     return lam, phi, mass, driven, phi_s[:, j], math.sqrt(lam_s[j])
 

@@ -274,28 +274,11 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
     # the slack span under the fit's load hangs on its sag in level 3: the floor is fitted
     # over the spans' parabola sag, so it stands only for what the sag does not hold
     sags = SG.span_terms(drive, p3)
-    _FELL_BACK.pop(("wrap",) + key, None)
-    failed = other = None
     try:
         c, f, b = _ends(drive, p3, t_held, slack3, km, dt, sags)
-    except ValueError as err:
-        failed = err
-        other = _other_mode(model, rests, drive, p3, omegas, t_held, slack3, dt, sags)
-    if other is not None:
-        # the wrap's mode needs ends the spans cannot give at the held tension: the mode with
-        # the larger share, which they can, holds level 3's static tension (item 4 first)
-        _FELL_BACK[("wrap",) + key] = (
-            f"level 3's wrap mode at rest ({omega / (2.0 * math.pi):.4g} Hz, the sprockets' "
-            f"pitch circles moving against each other) needs a wrap stiffer than "
-            f"the spans give at level 3's tooth-period-mean static tension ({t_held:.4g} N), so "
-            f"levels 1-2 are fitted to the mode with the larger share of the driven sprocket "
-            f"({other[1] / (2.0 * math.pi):.4g} Hz) and hold that tension: their torsional mode "
-            f"may be far off level 3's (the trade study's 6/9-tooth drive: 137 Hz against level "
-            f"3's 233 Hz); run level 3 where the torsional mode matters")
-        omegas, omega, km, (c, f, b) = other
-    elif failed is not None:
+    except ValueError as failed:
         if t_held == t0:
-            raise failed
+            raise
         # the tooth-period mean leaves the spans too soft at rest for level 3's mode (a floor
         # fitted under a low mean): the ends hold the angle-0 tension, as before the mean
         c, f, b = _ends(drive, p3, t0, slack3, km, dt, sags)
@@ -314,23 +297,6 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
                    tuple(float(r.mean_tension) for r in rests))
 
 
-def _other_mode(model, rests, drive, p3, omegas, t_held, slack3, dt, sags):
-    """(omegas, omega, K_m, ends) of level 3's mode picked by the larger share of the driven
-    sprocket alone (multibody_statics.linearised_modes with ``wrap_first`` off), where it is
-    another mode than ``omegas`` and the ends hold ``t_held`` on it; else None."""
-    if not omegas:
-        return None
-    try:
-        other = _tooth_modes(model, rests, wrap_first=False)
-        if abs(np.mean(other) / np.mean(omegas) - 1.0) < 1e-9:
-            return None
-        omega = float(np.mean(other))
-        km = modal_stiffness(drive, p3, omega)
-        return other, omega, km, _ends(drive, p3, t_held, slack3, km, dt, sags)
-    except ValueError:
-        return None
-
-
 def tooth_positions(drive: Drive) -> np.ndarray:
     """The ``ANGLES`` driver angles [rad] over a tooth period at which the fit takes level 3's
     loaded split and mode, and levels 1-2 their own mode (means over them), angle 0 first."""
@@ -341,20 +307,28 @@ def _tooth_modes(model, rests, wrap_first: bool = True) -> list[float]:
     """[omega, ...] [rad/s]: level 3's linear driven-sprocket mode
     (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) at the driver
     positions of ``rests`` where it has one (their mean is the fit's; ``ANGLES`` minus their
-    count the positions missed), picked with ``wrap_first`` as linearised_modes says; ValueError
+    count the positions missed), picked with ``wrap_first`` as linearised_modes says, or by
+    the larger share at every position where the wrap's mode is taken at some only; ValueError
     where the first position (angle 0) has no mode. Level 3's static tension, and with it its
-    wrap's stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz); levels 1-2
-    see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
+    wrap's stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz);
+    levels 1-2 see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
     those with a comparable response or share in the driven sprocket (``near``)."""
     from .multibody_statics import linear_driven_modes
-    omega = linear_driven_modes(model, rests[0], wrap_first=wrap_first)[0]
+    took: list[bool] = []
+    omega = linear_driven_modes(model, rests[0], wrap_first=wrap_first, choice=took)[0]
     omegas = [omega]
     for rest in rests[1:]:
         try:
-            omegas.append(linear_driven_modes(model, rest, near=omega,
-                                              wrap_first=wrap_first)[0])
+            omegas.append(linear_driven_modes(model, rest, near=omega, wrap_first=wrap_first,
+                                              choice=took)[0])
         except ValueError:
             pass
+    if any(took) and not all(took):
+        # the wrap's mode at some positions only: the two static modes swap their roles over
+        # the tooth (a 9/9 drive of 20 links on xu2010's shaft: the wrap's mode 361-382 Hz at
+        # three positions, the other's continuation at the fourth 191 Hz, whose mean rang 12 %
+        # low), so one mode is followed over the whole tooth: the larger share's
+        return _tooth_modes(model, rests, wrap_first=False)
     return omegas
 
 
@@ -445,8 +419,8 @@ def mode_spread(drive: Drive, params: Mapping[str, Any], level: int | None) -> s
     Levels 1-2 hold one wrap stiffness, fitted so that their mode is the mean of level 3's
     over ``ANGLES`` driver positions in a tooth period (:func:`wrap_fit`). Where level 3's
     mode at some position lies more than ``MODE_SPREAD`` from that mean, its chain is a
-    different spring from one part of a tooth to the next (few teeth, a short chain) and one
-    mode does not stand for it (its static tension swings with the chain's path length over
+    different spring from one part of a tooth to the next and one mode does not stand for it
+    (its static tension swings with the chain's path length over
     the tooth: an audit's 7/7 10B drive, 9-1206 N with 20 links, 444-457 N with 21, spans of a
     whole number of pitches): the trade study's 6/9-tooth drive, 72-236 Hz over a tooth,
     rings at 137 Hz at levels 1-2 against level 3's 233 Hz after a sudden start to 5 rpm;
@@ -711,8 +685,6 @@ def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None)
         return found
     if (None,) + key in _FELL_BACK:
         found.insert(0, _FELL_BACK[(None,) + key])
-    if ("wrap",) + key in _FELL_BACK:
-        found.append(_FELL_BACK[("wrap",) + key])
     own = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
     if level is not None and own in _FELL_BACK:
         found.append(_FELL_BACK[own])
