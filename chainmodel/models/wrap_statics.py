@@ -247,9 +247,9 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
             slack3 = float(np.mean(slacks))
         except ValueError:   # no loaded equilibrium found: no floor
             slack3 = None
-    omegas = []
+    omegas, swapped = [], []
     try:
-        omegas = _tooth_modes(model, rests)
+        omegas = _tooth_modes(model, rests, swapped=swapped)
         omega, short = float(np.mean(omegas)), ANGLES - len(omegas)
         km = modal_stiffness(drive, p3, omega)
     except ValueError as exc:   # no mode to take (singular roller stiffness): the secant
@@ -270,6 +270,17 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
                 f"matters")
         else:
             _FELL_BACK.pop((None,) + key, None)
+    if swapped:
+        _FELL_BACK[("swap",) + key] = (
+            f"level 3's two torsional modes on the input shaft swap roles over a driver tooth "
+            f"(the chain's, the sprockets' pitch circles moving against each other, is found at "
+            f"some of the fit's {ANGLES} driver positions only), so levels 1-2 follow the mode "
+            f"with the larger share of the driven sprocket at all of them: their torsional "
+            f"mode may be off level 3's by up to about 10 % (xu2010 at twice its seat "
+            f"clearance on a 20 kN.m/rad shaft: -8.8 %; a 9/9 drive of 20 links: -4.2 %); run "
+            f"level 3 where the torsional mode matters")
+    else:
+        _FELL_BACK.pop(("swap",) + key, None)
     dt = m_b / ro
     # the slack span under the fit's load hangs on its sag in level 3: the floor is fitted
     # over the spans' parabola sag, so it stands only for what the sag does not hold
@@ -303,12 +314,14 @@ def tooth_positions(drive: Drive) -> np.ndarray:
     return 2.0 * math.pi / drive.n_driver * np.arange(ANGLES) / ANGLES
 
 
-def _tooth_modes(model, rests, wrap_first: bool = True) -> list[float]:
+def _tooth_modes(model, rests, wrap_first: bool = True, swapped: list | None = None
+                 ) -> list[float]:
     """[omega, ...] [rad/s]: level 3's linear driven-sprocket mode
     (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) at the driver
     positions of ``rests`` where it has one (their mean is the fit's; ``ANGLES`` minus their
     count the positions missed), picked with ``wrap_first`` as linearised_modes says, or by
-    the larger share at every position where the wrap's mode is taken at some only; ValueError
+    the larger share at every position where the wrap's mode is taken at some only (then
+    True is appended to ``swapped``, a list, if given); ValueError
     where the first position (angle 0) has no mode. Level 3's static tension, and with it its
     wrap's stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz);
     levels 1-2 see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
@@ -328,6 +341,8 @@ def _tooth_modes(model, rests, wrap_first: bool = True) -> list[float]:
         # the tooth (a 9/9 drive of 20 links on xu2010's shaft: the wrap's mode 361-382 Hz at
         # three positions, the other's continuation at the fourth 191 Hz, whose mean rang 12 %
         # low), so one mode is followed over the whole tooth: the larger share's
+        if swapped is not None:
+            swapped.append(True)
         return _tooth_modes(model, rests, wrap_first=False)
     return omegas
 
@@ -685,6 +700,8 @@ def fallbacks(drive: Drive, params: Mapping[str, Any], level: int | None = None)
         return found
     if (None,) + key in _FELL_BACK:
         found.insert(0, _FELL_BACK[(None,) + key])
+    if ("swap",) + key in _FELL_BACK:
+        found.append(_FELL_BACK[("swap",) + key])
     own = (level,) + parameters_key(drive, params, skip=_OWN_SKIP)
     if level is not None and own in _FELL_BACK:
         found.append(_FELL_BACK[own])
