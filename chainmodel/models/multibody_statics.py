@@ -526,9 +526,9 @@ def linear_driven_modes(model, solution: StaticSolution, near: float | None = No
     share is at least ``WRAP_SHARE``: the one whose pitch circles move against each other and
     which keeps less of its strain energy in the input shaft than the other (the one the span
     stiffness moves most). That is the static wrap. ``choice``: a list to which whether the
-    wrap's mode was taken is appended (driver free only). Then only the rollers seated on a sprocket (in contact at rest) condensed - they
-    turn with their sprocket as levels 1-2's chain inertia puts them on it - and the span
-    rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
+    wrap's mode was taken is appended (driver free only). Then only the rollers seated on a
+    sprocket (in contact at rest) condensed - they turn with their sprocket as levels 1-2's
+    chain inertia puts them on it - and the span rollers keep their inertia: at xu2010's 600 Hz, ten times a span's first string mode,
     they do not follow their static shapes (tests/test_top_rung_modes.py: 598.2 Hz with every
     roller's inertia, 601.5 Hz so, 568.4 Hz with none), and on a sagging chain the static
     secant is its sag's, which a span above its string modes does not give. The mode returned

@@ -247,9 +247,9 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
             slack3 = float(np.mean(slacks))
         except ValueError:   # no loaded equilibrium found: no floor
             slack3 = None
-    omegas, swapped = [], []
+    omegas, swapped = [], False
     try:
-        omegas = _tooth_modes(model, rests, swapped=swapped)
+        omegas, swapped = _tooth_modes(model, rests)
         omega, short = float(np.mean(omegas)), ANGLES - len(omegas)
         km = modal_stiffness(drive, p3, omega)
     except ValueError as exc:   # no mode to take (singular roller stiffness): the secant
@@ -287,7 +287,7 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
     sags = SG.span_terms(drive, p3)
     try:
         c, f, b = _ends(drive, p3, t_held, slack3, km, dt, sags)
-    except ValueError as failed:
+    except ValueError as exc:
         if t_held == t0:
             raise
         # the tooth-period mean leaves the spans too soft at rest for level 3's mode (a floor
@@ -295,7 +295,7 @@ def _wrap_fit(drive: Drive, params: Mapping[str, Any], key: tuple) -> WrapFit:
         c, f, b = _ends(drive, p3, t0, slack3, km, dt, sags)
         held_note = (f"levels 0-2's spans hold level 3's static tension at driver angle 0 "
                      f"({t0:.4g} N), not its tooth-period mean ({t_held:.4g} N): on the mean "
-                     f"{failed} (their running span means then sit off level 3's by the "
+                     f"{exc} (their running span means then sit off level 3's by the "
                      f"difference)")
         t_held = t0
     if held_note is None:
@@ -314,18 +314,18 @@ def tooth_positions(drive: Drive) -> np.ndarray:
     return 2.0 * math.pi / drive.n_driver * np.arange(ANGLES) / ANGLES
 
 
-def _tooth_modes(model, rests, wrap_first: bool = True, swapped: list | None = None
-                 ) -> list[float]:
-    """[omega, ...] [rad/s]: level 3's linear driven-sprocket mode
+def _tooth_modes(model, rests, wrap_first: bool = True) -> tuple[list[float], bool]:
+    """([omega, ...] [rad/s], swapped): level 3's linear driven-sprocket mode
     (:func:`~chainmodel.models.multibody_statics.linear_driven_modes`) at the driver
     positions of ``rests`` where it has one (their mean is the fit's; ``ANGLES`` minus their
     count the positions missed), picked with ``wrap_first`` as linearised_modes says, or by
     the larger share at every position where the wrap's mode is taken at some only (then
-    True is appended to ``swapped``, a list, if given); ValueError
+    ``swapped`` is True); ValueError
     where the first position (angle 0) has no mode. Level 3's static tension, and with it its
     wrap's stiffness, moves with the driver's position (C1: 364-551 N, mode 24.5-25.3 Hz);
-    levels 1-2 see the chain's tooth-period mean. At the other positions, the mode nearest angle 0's among
-    those with a comparable response or share in the driven sprocket (``near``)."""
+    levels 1-2 see the chain's tooth-period mean. At the other positions, the mode nearest
+    angle 0's among those with a comparable response or share in the driven sprocket
+    (``near``)."""
     from .multibody_statics import linear_driven_modes
     took: list[bool] = []
     omega = linear_driven_modes(model, rests[0], wrap_first=wrap_first, choice=took)[0]
@@ -341,10 +341,8 @@ def _tooth_modes(model, rests, wrap_first: bool = True, swapped: list | None = N
         # the tooth (a 9/9 drive of 20 links on xu2010's shaft: the wrap's mode 361-382 Hz at
         # three positions, the other's continuation at the fourth 191 Hz, whose mean rang 12 %
         # low), so one mode is followed over the whole tooth: the larger share's
-        if swapped is not None:
-            swapped.append(True)
-        return _tooth_modes(model, rests, wrap_first=False)
-    return omegas
+        return _tooth_modes(model, rests, wrap_first=False)[0], True
+    return omegas, False
 
 
 def _ends(drive: Drive, params: Mapping[str, Any], t0: float, slack3: float | None,
