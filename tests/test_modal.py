@@ -185,9 +185,41 @@ def test_static_sag_matches_the_string_formula():
         out = m.outputs(0.0, x, u)
         rho = sc.parameters["chain.link_mass"] / sc.drive.pitch
         l = m.reference["l_up"]
-        # (the initial state's modes hold the sag at the tension the spans hold at rest)
-        sag = rho * 9.81 * l * l / (8 * m.held_tension())
+        # (the initial state's modes hold the sag at the tension the span holds at rest)
+        sag = rho * 9.81 * l * l / (8 * out["tight_span.tension"])
         assert out["tight_span.midspan_deflection"] == pytest.approx(-sag, rel=tol)
+
+
+@pytest.fixture(scope="module")
+def short_12b(tmp_path_factory):
+    """A 12B 8/16 drive of 32 links without pretension (an independent audit's, twenty-sixth
+    session of issue 21): its path length swings over a driver tooth, and its chain hangs on
+    tens of newtons."""
+    from chainmodel.new_scene import scene_text
+    path = tmp_path_factory.mktemp("rest") / "12b.toml"
+    path.write_text(scene_text(8, 16, 5.0, 0.0, chain="12B", links=32, static_tension=0.0))
+    return str(path)
+
+
+def test_rest_is_an_equilibrium_with_each_string_at_its_own_sag(short_12b):
+    """At four driver positions over a tooth, level 2's rest has no acceleration in any
+    coordinate, and each string hangs at the sag of the tension its span holds there (the
+    string formula as above, one mode's 4/pi^3 against 1/8). With each string held at the
+    sag of the tooth-period-mean tension instead, the sprockets' equilibrium left the spans on
+    0.16 N at two positions, accelerations up to 36 m/s^2."""
+    sc = chainmodel.scene.load_scene(short_12b, fidelity=2)
+    m = sc.model()
+    rho = sc.parameters["chain.link_mass"] / sc.drive.pitch
+    l = m.reference["l_up"]
+    for k in range(4):
+        # 0.05 N m makes the upper span the tight one (the one whose sag is an output)
+        u = Inputs(2 * math.pi / sc.drive.n_driver * k / 4, 0.0, 0.05)
+        x = m.initial_state(u)
+        assert np.max(np.abs(m.rhs(0.0, x, u))) < 1e-5, k
+        out = m.outputs(0.0, x, u)
+        t = out["tight_span.tension"]
+        assert out["tight_span.midspan_deflection"] == pytest.approx(
+            -rho * 9.81 * l * l / (8 * t), rel=0.04), (k, t)
 
 
 def test_runs_and_reports_midspan_from_modes():

@@ -36,7 +36,7 @@ import numpy as np
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["linear_positions", "driven_mode", "tooth_mean_mode", "fitted_ends", "TOLERANCE"]
+__all__ = ["position_states", "linear_positions", "driven_mode", "tooth_mean_mode", "fitted_ends", "TOLERANCE"]
 
 #: the fitted mode's relative distance from level 3's at which the iteration stops
 TOLERANCE = 1e-5
@@ -48,15 +48,21 @@ SLOPE_MIN, MAX_STEP = 0.02, 4.0
 _CACHE: dict = {}
 
 
+def position_states(model) -> tuple[list[int], list[int]]:
+    """(indices of the position states, indices of their accelerations) in levels 1-2's layout
+    (:func:`linear_positions`)."""
+    ns, nm = model.n_sprocket_states, model.n_modes
+    return (list(range(ns // 2)) + list(range(ns, ns + 2 * nm)),
+            list(range(ns // 2, ns)) + list(range(ns + 2 * nm, ns + 4 * nm)))
+
+
 def linear_positions(model, x: np.ndarray, u: Inputs, h: float = 1e-6
                      ) -> tuple[np.ndarray, np.ndarray]:
     """(indices of the position states, -d(accelerations)/d(positions) at ``x``): central
     differences of ``model.rhs``, each position stepped by ``h`` times its state scale. Levels
     1-2's layout: sprocket angles, sprocket speeds, then [q_up, q_low, v_up, v_low] of the
     string modes (at rest dq/dt = v, so dv/dt is the modal acceleration)."""
-    ns, nm = model.n_sprocket_states, model.n_modes
-    pos = list(range(ns // 2)) + list(range(ns, ns + 2 * nm))
-    acc = list(range(ns // 2, ns)) + list(range(ns + 2 * nm, ns + 4 * nm))
+    pos, acc = position_states(model)
     scale = model.state_scale()
     a = np.empty((len(pos), len(pos)))
     for j, i in enumerate(pos):
