@@ -216,7 +216,9 @@ CAUSES = {"chain_too_long": "chain too long for the centre distance",
           "implausible_value": "a chain value far from its ISO 606 chain's",
           "hanging_spans": "spans hanging along their length at level 1 or 2",
           "span_vibration": "level 2's spans vibrating beyond its string model",
-          "start_unloaded": "level 3 started unloaded: no static equilibrium under the load"}
+          "start_unloaded": "level 3 started unloaded: no static equilibrium under the load",
+          "start_not_at_rest": "level 2 started with its strings off their own sag: no rest "
+                               "found"}
 
 
 # --- geometry (every level) ---------------------------------------------------------------------
@@ -1035,11 +1037,14 @@ def result_problems(result) -> list[Problem]:
     _, speed, _, load = sc.input_arrays(result.time)
     outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS + SPAN_OUTPUTS if n in result}
     found = problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load,
-                     bool(result.start_fallback))
-    return found + start_problems(result.start_fallback)
+                     bool(result.start_fallback) and result.fidelity == 3)
+    return found + start_problems(result.start_fallback, result.fidelity)
 
 
-def start_problems(fallback: str | None) -> list[Problem]:
+def start_problems(fallback: str | None, level: int | None = 3) -> list[Problem]:
     """The run's start where the model could not start where it should (``Model.start_fallback``:
-    level 3 without a loaded static equilibrium)."""
-    return [Problem("start_unloaded", fallback)] if fallback else []
+    level 3 without a loaded static equilibrium, code ``start_unloaded``; level 2 without a
+    rest with its strings at their own sag, ``start_not_at_rest``)."""
+    if not fallback:
+        return []
+    return [Problem("start_unloaded" if level == 3 else "start_not_at_rest", fallback)]

@@ -393,7 +393,7 @@ class ChainDrive(Fmi2Slave):
         if state is None:   # a new run: its validity checks start afresh
             self._monitor = self._validity.Monitor(
                 built.drive, params, built.level, self._output_names,
-                started_unloaded=bool(built.stepper.model.start_fallback))
+                started_unloaded=bool(built.stepper.model.start_fallback) and built.level == 3)
         self._stepper, self._model_params = built.stepper, params
         self._params_changed = False
         return built.stepper
@@ -442,7 +442,8 @@ class ChainDrive(Fmi2Slave):
         self._check_validity(st.t, row, u.speed, u.torque,
                              self._validity.geometry_problems(st.model.drive, self._model_params,
                                                               st.model.level)
-                             + self._validity.start_problems(st.model.start_fallback))
+                             + self._validity.start_problems(st.model.start_fallback,
+                                                             st.model.level))
         level = self._model_params["fidelity"]
         qs = [n for n, d in st.model.output_descriptions().items()
               if d.startswith(self._M.base.QUASI_STATIC)]

@@ -264,3 +264,58 @@ def test_more_modes_run_with_the_gyroscopic_coupling():
     """Three modes per span at speed: runs, and the coupled modal energy stays bounded."""
     r = chainmodel.simulate("C1", fidelity=2, modal_modes=3, duration=0.1, output_interval=1e-3)
     assert np.max(np.abs(r["tight_span.midspan_deflection"])) < 0.01
+
+
+@pytest.fixture(scope="module")
+def equal_teeth(tmp_path_factory):
+    """Equal-tooth drives without pretension (an independent audit's, twenty-seventh session):
+    under load their slack span starts at 1e-15 N with the strings at the held tension's sag,
+    where the Jacobian is singular."""
+    from chainmodel.new_scene import scene_text
+    root = tmp_path_factory.mktemp("equal")
+    paths = {}
+    for chain, z in (("08B", 12), ("16B", 8)):
+        paths[chain] = root / f"{chain}.toml"
+        paths[chain].write_text(scene_text(z, z, 5.0, 0.0, chain=chain, static_tension=0.0))
+    return {k: str(v) for k, v in paths.items()}
+
+
+@pytest.mark.parametrize("chain, torque", [("08B", 5.0), ("08B", 40.0), ("16B", 80.0)])
+def test_a_loaded_rest_without_pretension_is_an_equilibrium(equal_teeth, chain, torque):
+    """Under load, at four driver positions: no acceleration in any coordinate, the slack span
+    carrying tension (its string hangs on it), and no fallback reported. Before, each was a
+    silent fallback (accelerations 38-1600 m/s^2); the 16B drive at 80 N m needs the load in
+    steps from the unloaded rest."""
+    sc = chainmodel.scene.load_scene(equal_teeth[chain], fidelity=2)
+    m = sc.model()
+    for k in range(4):
+        u = Inputs(2 * math.pi / sc.drive.n_driver * k / 4, 0.0, torque)
+        x = m.initial_state(u)
+        assert m.start_fallback is None, k
+        assert np.max(np.abs(m.rhs(0.0, x, u))) < 1e-5, k
+        assert m.outputs(0.0, x, u)["slack_span.tension"] > 1.0, k
+
+
+def test_a_rest_not_found_is_said(monkeypatch):
+    """Where the steps find no rest (forced here: no steps allowed), the run says so
+    (start_not_at_rest), and the breaking-load check does not call it an unloaded start."""
+    from chainmodel.models import modal
+    monkeypatch.setattr(modal, "REST_ITERATIONS", 0)
+    r = chainmodel.simulate("xu2010", fidelity=2, duration=0.02)
+    found = {p.code: p.message for p in r.problems}
+    assert "start_not_at_rest" in found and "level 2 found no rest" in found["start_not_at_rest"]
+    assert "start_unloaded" not in found
+
+
+def test_a_rest_beyond_the_string_model_is_refused():
+    """xu2010 under 900 N m: the slack span's string would rest deeper than a tenth of the
+    span, where the string model holds and the run's own check stops it; refused at the start
+    naming the load, where before the run stopped at its first step blaming the meshing."""
+    sc = chainmodel.Scene.from_preset("xu2010", fidelity=2, load_torque=900.0)
+    m = sc.model()
+    limit = 0.1 * min(m.reference["l_up"], m.reference["l_low"])
+    with pytest.raises(ValueError, match=r"load.torque = 900 N.m.*beyond"):
+        m.initial_state(Inputs(0.0, 0.0, 900.0))
+    u = Inputs(0.0, 0.0, 600.0)
+    x = m.initial_state(u)
+    assert np.max(np.abs(x[m.n_sprocket_states:m.n_sprocket_states + 2 * m.n_modes])) < limit

@@ -48,10 +48,16 @@ from .wrap_statics import honoured, unavailable
 
 __all__ = ["ModalModel", "galerkin_coefficients"]
 
-#: Newton steps of :meth:`ModalModel.initial_state` to the strings' own sag, the step [in
-#: state scales] at which they stop, and the largest move of a string coordinate per step [in
-#: amplitude limits, ModalModel._amplitude_limit]
-REST_ITERATIONS, REST_TOLERANCE, REST_STEP = 50, 1e-9, 0.1
+#: Newton steps of :meth:`ModalModel._rest` to the strings' own sag, the step [in state
+#: scales] at which they stop, the largest move of a string coordinate (and of a pitch circle)
+#: per step [in amplitude limits, ModalModel._amplitude_limit], the halvings of a step that does
+#: not lower the accelerations, and the regularisation of a singular Jacobian
+REST_ITERATIONS, REST_TOLERANCE, REST_STEP = 100, 1e-9, 0.1
+REST_HALVINGS, REST_DAMPING, REST_LOAD_STEPS = 30, 1e-8, 8
+
+
+def _settled(dy: np.ndarray, scale: np.ndarray) -> bool:
+    return bool(np.max(np.abs(dy) / scale) < REST_TOLERANCE)
 
 
 def galerkin_coefficients(modes: int) -> dict[str, np.ndarray]:
@@ -153,44 +159,123 @@ class ModalModel(TorsionalModel):
 
     def initial_state(self, u: Inputs) -> np.ndarray:
         """Rest in static equilibrium (level 1's :meth:`TorsionalModel.initial_state`) with the
-        strings hanging at the sag of their own tension there: from the sprockets' equilibrium
-        with each string at the sag of the held tension (:meth:`_modal_initial`), Newton steps on
-        every position (sprocket angles and string coordinates) to zero acceleration, the
-        Jacobian from central differences of the right-hand side
-        (:func:`~chainmodel.models.torsional_mode.linear_positions`), each step scaled down so
-        that no string coordinate moves by more than ``REST_STEP`` of the strings' amplitude
-        limit (a string near no tension is nearly free, and a full step from there overshoots
-        by metres; with the cap the 12B drive below settles in 5-9 steps at every trial
-        stiffness of its fit, without it not at one). A string's sag takes up
-        chain as 1 / T^2, so where the polygon shortens the path over a tooth a string held at the
-        held tension's sag leaves the sprockets' equilibrium on almost no tension: a 12B 8/16
-        drive of 32 links without pretension rested at 0.16 N at two of four driver positions
-        where level 3 rests at 19-21 N and level 1 at 22 N (with it, level 2 at 22 N). Where
-        the steps do not settle the sprockets' equilibrium is kept (the strings then ring about
-        their sag from the start)."""
+        strings hanging at the sag of their own tension there (:meth:`_rest`); ValueError
+        where that sag lies beyond the string model's amplitude limit (the run would stop at
+        its first step), and :attr:`start_fallback` set where the rest could not be found."""
         x = super().initial_state(u)
+        self.start_fallback = None
         if self.params["gravity"] == 0.0 or not self.n_modes:
             return x             # no sag: the strings rest straight
+        y = self._rest(x, u)
+        if y is None and float(u.torque) != 0.0:
+            y = self._rest_by_load(u)
+        if y is None:
+            self.start_fallback = (
+                f"level 2 found no rest with its strings at their own sag (driver angle "
+                f"{float(u.angle):.4g} rad, load.torque = {float(u.torque):g} N.m), so they "
+                f"started at the sag of the held tension ({self.held_tension():.4g} N) and "
+                f"ring from there: the first tenths of a second carry that ring, not the "
+                f"inputs' (docs/reduced_models.md, \"Level 2\", Rest)")
+            return x
+        base = self.n_sprocket_states
+        sag = float(np.max(np.abs(y[base:base + 2 * self.n_modes])))
+        if sag > self._amplitude_limit():
+            raise ValueError(
+                f"level 2 at rest under load.torque = {float(u.torque):g} N.m: a span's string "
+                f"hangs {1e3 * sag:.3g} mm, beyond {1e3 * self._amplitude_limit():.3g} mm (a "
+                f"tenth of the shorter span) where the string model holds: the load leaves the "
+                f"slack span on too little tension for level 2 (static tension "
+                f"{self.held_tension():.4g} N); add pretension (chain.pretension), lower the "
+                f"load, or run level 3 (or level 1, whose spans keep their sag quasi-statically)")
+        return y
+
+    def _rest(self, x: np.ndarray, u: Inputs) -> np.ndarray | None:
+        """From the sprockets' equilibrium ``x`` (each string at the sag of the held tension,
+        :meth:`_modal_initial`), Newton steps on every position (sprocket angles and string
+        coordinates) to zero acceleration, the Jacobian from central differences of the
+        right-hand side (:func:`~chainmodel.models.torsional_mode.linear_positions`); None where
+        they do not settle. A string's sag takes up chain as 1 / T^2, so where the polygon
+        shortens the path over a tooth a string held at the held tension's sag leaves the
+        sprockets' equilibrium on almost no tension: a 12B 8/16 drive of 32 links without
+        pretension rested at 0.16 N at two of four driver positions where level 3 rests at
+        19-21 N and level 1 at 22 N (with it, level 2 at 22 N).
+
+        Globalised, since a string near no tension is nearly free and a span near no tension
+        soft on one side and stiff on the other (an audit's 08B 6/8 drive inclined 88 deg cycled
+        between 0.34 N and 67 kN; equal-tooth drives without pretension under load start with
+        a slack span at 1e-15 N and a singular Jacobian): each step is scaled so that no string
+        coordinate moves by more than ``REST_STEP`` of the strings' amplitude limit and no
+        sprocket's pitch circle by more than that length; the Jacobian is regularised by
+        ``REST_DAMPING`` times its largest diagonal where it is singular; and a step is halved
+        (up to ``REST_HALVINGS`` times) until the accelerations, each over the first
+        Jacobian's diagonal (floored at 1e-9 of its largest), shrink."""
         from .torsional_mode import linear_positions, position_states
-        acc = position_states(self)[1]
-        y = x.copy()
-        strings = slice(self.n_sprocket_states // 2, None)  # the string coordinates
+        pos_idx, acc = position_states(self)
+        ns = self.n_sprocket_states
+        scale = self.state_scale()[pos_idx]
         cap = REST_STEP * self._amplitude_limit()
+        radii = [self.drive.driver.pitch_radius, self.drive.driven.pitch_radius]
+        # each position's largest move in one step: the strings' cap as a length on the pitch
+        # circles (the driven sprocket alone where the driver is held rigid)
+        limit = np.array([cap / r for r in radii[-(ns // 2):]]
+                         + [cap] * (len(pos_idx) - ns // 2))
+        y = x.copy()
+        _, a = linear_positions(self, y, u)
+        diag = np.abs(np.diag(a))
+        weight = 1.0 / np.maximum(diag, 1e-9 * max(float(np.max(diag)), 1e-300))
+
+        def merit(z):
+            r = self.rhs(0.0, z, u)[acc]
+            return float(np.linalg.norm(r * weight)), r
+
+        m0, r = merit(y)
         for _ in range(REST_ITERATIONS):
-            pos, a = linear_positions(self, y, u)
-            try:
-                dy = np.linalg.solve(a, self.rhs(0.0, y, u)[acc])
-            except np.linalg.LinAlgError:
-                return x
-            largest = np.max(np.abs(dy[strings]))
-            if largest > cap:
-                dy *= cap / largest
-            y[pos] += dy
-            if not np.all(np.isfinite(y)):
-                return x
-            if np.max(np.abs(dy) / self.state_scale()[pos]) < REST_TOLERANCE:
+            step = self._rest_step(a, r, y, m0, merit, limit, scale, pos_idx)
+            if step is None:
+                return None             # no step lowers the accelerations
+            y, m0, r, done = step
+            if done:
                 return y
-        return x
+            _, a = linear_positions(self, y, u)
+        return None
+
+    def _rest_by_load(self, u: Inputs) -> np.ndarray | None:
+        """:meth:`_rest` under ``u.torque`` reached in ``REST_LOAD_STEPS`` equal steps of the
+        load from the unloaded rest, each from the last (a 16B 8/8 drive without pretension
+        under 80 N m starts its slack span at 1e-15 N, from where no step along Newton's
+        direction lowers the accelerations; from the unloaded rest its string sags already)."""
+        y = self._rest(super().initial_state(Inputs(u.angle, 0.0, 0.0)),
+                       Inputs(u.angle, 0.0, 0.0))
+        for k in range(1, REST_LOAD_STEPS + 1):
+            if y is None:
+                return None
+            y = self._rest(y, Inputs(u.angle, 0.0, float(u.torque) * k / REST_LOAD_STEPS))
+        return y
+
+    @staticmethod
+    def _rest_step(a, r, y, m0, merit, limit, scale, pos_idx):
+        """One step of :meth:`_rest`: (y, merit, accelerations, settled), or None where no
+        step along Newton's direction lowers the merit."""
+        try:
+            dy = np.linalg.solve(a, r)
+        except np.linalg.LinAlgError:      # a string with no tension: its row is zero
+            dy = np.linalg.solve(a + REST_DAMPING * float(np.max(np.abs(np.diag(a))))
+                                 * np.eye(len(r)), r)
+        if not np.all(np.isfinite(dy)):
+            return None
+        dy *= min(1.0, float(np.min(limit / np.maximum(np.abs(dy), 1e-300))))
+        if _settled(dy, scale):          # a full step within the tolerance: there
+            z = y.copy()
+            z[pos_idx] += dy
+            return z, m0, r, True
+        for _ in range(REST_HALVINGS + 1):
+            z = y.copy()
+            z[pos_idx] += dy
+            m1, r1 = merit(z)
+            if m1 < m0:                  # (False for nan)
+                return z, m1, r1, False
+            dy *= 0.5
+        return None
 
     def _modal_initial(self, u: Inputs) -> np.ndarray:
         """Static sag under gravity at the static tension (linear), zero velocities."""

@@ -105,7 +105,10 @@ def driven_mode(model, shape: np.ndarray, angle: float = 0.0, rank: int | None =
     linear mode with the largest mass-weighted MAC against the sprocket rotations ``shape``;
     with ``rank``, the mode of that rank instead (where the level has as many)."""
     u = Inputs(angle=angle)
-    _, a = linear_positions(model, model.initial_state(u), u)
+    x = model.initial_state(u)
+    if getattr(model, "start_fallback", None):      # level 2 without its strings' rest
+        raise ValueError(f"no rest at driver angle {angle:.4g} rad ({model.start_fallback})")
+    _, a = linear_positions(model, x, u)
     lam, vecs = np.linalg.eig(a)
     lam, vecs = lam.real, vecs.real
     positive = np.sort(lam[lam > 0.0])
