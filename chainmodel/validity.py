@@ -511,8 +511,9 @@ class Monitor:
     def __init__(self, drive: Drive, params: Mapping[str, Any], level: int,
                  names: Sequence[str] | None = None, started_unloaded: bool = False):
         self.drive, self.params, self.level = drive, dict(params), int(level)
-        #: the run began unloaded (Model.start_fallback): a force peak is the load's step
-        self.started_unloaded = bool(started_unloaded)
+        #: the run began unloaded (Model.start_fallback at level 3): a force peak is the
+        #: load's step (level 2's fallback, its strings off their own sag, is no such start)
+        self.started_unloaded = bool(started_unloaded) and self.level == 3
         self.period = 2.0 * math.pi / drive.n_driver
         self.stats = _Stats()
         self._start = None          # (driver angle, transmission error) at the first sample
@@ -1037,7 +1038,7 @@ def result_problems(result) -> list[Problem]:
     _, speed, _, load = sc.input_arrays(result.time)
     outputs = {n: result[n] for n in OUTPUTS + LOSS_OUTPUTS + SPAN_OUTPUTS if n in result}
     found = problems(sc.drive, sc.parameters, result.fidelity, result.time, outputs, speed, load,
-                     bool(result.start_fallback) and result.fidelity == 3)
+                     bool(result.start_fallback))
     return found + start_problems(result.start_fallback, result.fidelity)
 
 

@@ -393,7 +393,7 @@ class ChainDrive(Fmi2Slave):
         if state is None:   # a new run: its validity checks start afresh
             self._monitor = self._validity.Monitor(
                 built.drive, params, built.level, self._output_names,
-                started_unloaded=bool(built.stepper.model.start_fallback) and built.level == 3)
+                started_unloaded=bool(built.stepper.model.start_fallback))
         self._stepper, self._model_params = built.stepper, params
         self._params_changed = False
         return built.stepper

@@ -56,10 +56,6 @@ REST_ITERATIONS, REST_TOLERANCE, REST_STEP = 100, 1e-9, 0.1
 REST_HALVINGS, REST_DAMPING, REST_LOAD_STEPS = 30, 1e-8, 8
 
 
-def _settled(dy: np.ndarray, scale: np.ndarray) -> bool:
-    return bool(np.max(np.abs(dy) / scale) < REST_TOLERANCE)
-
-
 def galerkin_coefficients(modes: int) -> dict[str, np.ndarray]:
     """G_m, E_m (seed 004 eq 59) and the skew-symmetric C_mn for m, n = 1..modes."""
     m = np.arange(1, modes + 1, dtype=float)
@@ -177,8 +173,7 @@ class ModalModel(TorsionalModel):
                 f"ring from there: the first tenths of a second carry that ring, not the "
                 f"inputs' (docs/reduced_models.md, \"Level 2\", Rest)")
             return x
-        base = self.n_sprocket_states
-        sag = float(np.max(np.abs(y[base:base + 2 * self.n_modes])))
+        sag = self._amplitude(y)
         if sag > self._amplitude_limit():
             raise ValueError(
                 f"level 2 at rest under load.torque = {float(u.torque):g} N.m: a span's string "
@@ -230,12 +225,27 @@ class ModalModel(TorsionalModel):
 
         m0, r = merit(y)
         for _ in range(REST_ITERATIONS):
-            step = self._rest_step(a, r, y, m0, merit, limit, scale, pos_idx)
-            if step is None:
-                return None             # no step lowers the accelerations
-            y, m0, r, done = step
-            if done:
+            try:
+                dy = np.linalg.solve(a, r)
+            except np.linalg.LinAlgError:      # a string with no tension: its row is zero
+                dy = np.linalg.solve(a + REST_DAMPING * float(np.max(np.abs(np.diag(a))))
+                                     * np.eye(len(r)), r)
+            if not np.all(np.isfinite(dy)):
+                return None
+            dy *= min(1.0, float(np.min(limit / np.maximum(np.abs(dy), 1e-300))))
+            if np.max(np.abs(dy) / scale) < REST_TOLERANCE:     # a full step within it: there
+                y[pos_idx] += dy
                 return y
+            for _ in range(REST_HALVINGS + 1):
+                z = y.copy()
+                z[pos_idx] += dy
+                m1, r1 = merit(z)
+                if m1 < m0:                  # (False for nan)
+                    break
+                dy *= 0.5
+            else:
+                return None                  # no step along Newton's lowers the accelerations
+            y, m0, r = z, m1, r1
             _, a = linear_positions(self, y, u)
         return None
 
@@ -251,31 +261,6 @@ class ModalModel(TorsionalModel):
                 return None
             y = self._rest(y, Inputs(u.angle, 0.0, float(u.torque) * k / REST_LOAD_STEPS))
         return y
-
-    @staticmethod
-    def _rest_step(a, r, y, m0, merit, limit, scale, pos_idx):
-        """One step of :meth:`_rest`: (y, merit, accelerations, settled), or None where no
-        step along Newton's direction lowers the merit."""
-        try:
-            dy = np.linalg.solve(a, r)
-        except np.linalg.LinAlgError:      # a string with no tension: its row is zero
-            dy = np.linalg.solve(a + REST_DAMPING * float(np.max(np.abs(np.diag(a))))
-                                 * np.eye(len(r)), r)
-        if not np.all(np.isfinite(dy)):
-            return None
-        dy *= min(1.0, float(np.min(limit / np.maximum(np.abs(dy), 1e-300))))
-        if _settled(dy, scale):          # a full step within the tolerance: there
-            z = y.copy()
-            z[pos_idx] += dy
-            return z, m0, r, True
-        for _ in range(REST_HALVINGS + 1):
-            z = y.copy()
-            z[pos_idx] += dy
-            m1, r1 = merit(z)
-            if m1 < m0:                  # (False for nan)
-                return z, m1, r1, False
-            dy *= 0.5
-        return None
 
     def _modal_initial(self, u: Inputs) -> np.ndarray:
         """Static sag under gravity at the static tension (linear), zero velocities."""
@@ -301,14 +286,18 @@ class ModalModel(TorsionalModel):
         """A tenth of the shorter span: beyond it the string model does not hold (check)."""
         return 0.1 * min(self.reference["l_up"], self.reference["l_low"])
 
-    def check(self, t: float, x: np.ndarray) -> None:
-        super().check(t, x)
+    def _amplitude(self, x: np.ndarray) -> float:
+        """The largest string coordinate |q_m| [m] of state ``x`` (0 without modes)."""
         base = self.n_sprocket_states
         q = np.abs(x[base:base + 2 * self.n_modes])
-        limit = self._amplitude_limit()
-        if q.size and np.max(q) > limit:
+        return float(np.max(q)) if q.size else 0.0
+
+    def check(self, t: float, x: np.ndarray) -> None:
+        super().check(t, x)
+        q = self._amplitude(x)
+        if q > self._amplitude_limit():
             raise SimulationDiverged(
-                f"modal model: a span's transverse amplitude reached {np.max(q):.3g} m at "
+                f"modal model: a span's transverse amplitude reached {q:.3g} m at "
                 f"t = {t:.6g} s, beyond a tenth of its length where the string model holds; "
                 + self._divergence_cause(x))
 

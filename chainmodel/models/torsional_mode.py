@@ -36,7 +36,8 @@ import numpy as np
 from .base import Inputs
 from .modal_assurance import closest_mode
 
-__all__ = ["position_states", "linear_positions", "driven_mode", "tooth_mean_mode", "fitted_ends", "TOLERANCE"]
+__all__ = ["position_states", "linear_positions", "driven_mode", "tooth_modes",
+           "tooth_mean_mode", "fitted_ends", "TOLERANCE"]
 
 #: the fitted mode's relative distance from level 3's at which the iteration stops
 TOLERANCE = 1e-5
@@ -123,17 +124,22 @@ def driven_mode(model, shape: np.ndarray, angle: float = 0.0, rank: int | None =
     return math.sqrt(lam[best]), int(np.searchsorted(positive, lam[best]))
 
 
-def tooth_mean_mode(model, shape: np.ndarray) -> float:
-    """The mean [rad/s] over wrap_statics' driver positions in a tooth period
-    (:func:`~chainmodel.models.wrap_statics.tooth_positions`, where wrap_fit takes level 3's)
-    of the mode :func:`driven_mode` picks at angle 0 and, at the other positions, the mode of
-    the same rank in frequency: where a string mode crosses the driven sprocket's (level 2 on
-    C1: 22-23 Hz against 25 Hz), the two share the rotation and the larger MAC jumps between
-    them, the branch does not."""
+def tooth_modes(model, shape: np.ndarray) -> list[float]:
+    """The level's driven-sprocket mode [rad/s] at each of wrap_statics' driver positions in a
+    tooth period (:func:`~chainmodel.models.wrap_statics.tooth_positions`, where wrap_fit takes
+    level 3's): the mode :func:`driven_mode` picks at angle 0 and, at the other positions, the
+    mode of the same rank in frequency: where a string mode crosses the driven sprocket's
+    (level 2 on C1: 22-23 Hz against 25 Hz), the two share the rotation and the larger MAC
+    jumps between them, the branch does not."""
     from .wrap_statics import tooth_positions
     first, *others = tooth_positions(model.drive)
     omega, rank = driven_mode(model, shape, first)
-    return float(np.mean([omega] + [driven_mode(model, shape, a, rank)[0] for a in others]))
+    return [omega] + [driven_mode(model, shape, a, rank)[0] for a in others]
+
+
+def tooth_mean_mode(model, shape: np.ndarray) -> float:
+    """The mean [rad/s] of :func:`tooth_modes`, the mode :func:`fitted_ends` fits."""
+    return float(np.mean(tooth_modes(model, shape)))
 
 
 def _next_stiffness(stiffness: float, omega: float, omega3: float,

@@ -27,7 +27,7 @@ import numpy as np
 
 from chainmodel.models import Inputs
 from chainmodel.models.wrap_statics import tooth_positions, wrap_fit
-from chainmodel.models.torsional_mode import _two_inertia_shape, driven_mode
+from chainmodel.models.torsional_mode import _two_inertia_shape, tooth_modes
 from chainmodel.new_scene import scene_text
 from chainmodel.scene import load_scene
 
@@ -42,7 +42,8 @@ def _scene(root: Path, label: str, *args, **kw) -> str:
 
 def table(root: Path) -> None:
     path = _scene(root, "12b_8_16", 8, 16, 5.0, 0.0, chain="12B", links=32, static_tension=0.0)
-    fit = wrap_fit(load_scene(path, fidelity=1).drive, load_scene(path, fidelity=1).parameters)
+    sc1 = load_scene(path, fidelity=1)
+    fit = wrap_fit(sc1.drive, sc1.parameters)
     print("driver position (of 4)      " + "".join(f"{k:>10d}" for k in range(4)))
     print("level 3 static tension [N]  " + "".join(f"{t:10.1f}" for t in fit.tensions))
     for level in (1, 2):
@@ -56,10 +57,7 @@ def table(root: Path) -> None:
     print("level 3 linear mode [Hz]    " + "".join(f"{f:10.1f}" for f in fit.modes))
     m = load_scene(path, fidelity=2).model()
     shape = _two_inertia_shape(m, fit.modal_stiffness, 2 * math.pi * fit.mode)
-    first, *others = tooth_positions(m.drive)       # as torsional_mode.tooth_mean_mode
-    omega, rank = driven_mode(m, shape, first)
-    own = [w / (2 * math.pi) for w in [omega] + [driven_mode(m, shape, a, rank)[0]
-                                                   for a in others]]
+    own = [w / (2 * math.pi) for w in tooth_modes(m, shape)]
     print("level 2 own mode [Hz]       " + "".join(f"{f:10.1f}" for f in own))
 
 
