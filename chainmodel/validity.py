@@ -92,13 +92,18 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
 * **span vibration** (level 2): its spans' mean tension sum, over the same samples and
   judged at the same instants as the span-modes check, against a rigid chain's, sample by
   sample (twice the static tension, or the driven sprocket's tension difference |load +
-  driven damping x speed| / R_o over a slack span at the weight's floor where more, plus both
-  spans' centrifugal tension rho v^2; seed 004 eqs 15-16). A warning at
-  :data:`VIBRATION_RATIO` = 3 x and by more than :data:`VIBRATION_FLOOR` = 1 % of the
-  breaking load (a chain carrying next to nothing is not running away; without a breaking
-  load, a pitch no ISO 606 chain has and no chain.breaking_load, no check): there level 2's
-  string mode, stiffened by its own stretch, has followed the meshing up and its stretch
-  carries most of the tension. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level
+  driven damping x speed + driven inertia x the input's acceleration x z1 / z2| / R_o over a
+  slack span at the weight's floor where more, plus both spans' centrifugal tension rho v^2;
+  seed 004 eqs 15-16). A warning at :data:`VIBRATION_RATIO` = 3 x and either by more than
+  :data:`VIBRATION_FLOOR` = 1 % of the breaking load or with the meshing within
+  :data:`LOCK_BAND` = 10 % of the slack span's first string mode at its running mean
+  tension (seed 004 eq 61): there level 2's string mode, stiffened by its own stretch, has
+  followed the meshing up and its stretch carries most of the tension. The floor alone let
+  light chains through (a 12B 8/16 drive without pretension at 200 rpm: 3.15 x level 3's sum,
+  258 N over the rigid chain's, under the 12B's 289 N floor, at 0.96 f_1); the band alone
+  would not tell a chain carrying next to nothing (no weight, no pretension: any tension is
+  many times its rigid sum) from a locked one. Without a breaking load (a pitch no ISO 606
+  chain has and no chain.breaking_load) only the band counts. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level
   3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x the rigid chain's); on the trade study's
   scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7 x (docs/reduced_models.md, "Level 2's
   spans locked on the meshing").
@@ -168,8 +173,13 @@ SPAN_JUDGE_PERIODS = 4
 #: vibration"; on the trade study's scenes level 2 reads 1.1-1.6 x, level 3 up to 2.6 x)
 VIBRATION_RATIO = 3.0
 #: ... and exceeds it by at least this share of the chain's breaking load (where known: the
-#: 08A audit drive's locked runs by 2.4-15 %)
+#: 08A audit drive's locked runs by 2.4-15 %) ...
 VIBRATION_FLOOR = 0.01
+#: ... or the meshing lies within this share of the slack span's first string mode at the
+#: spans' running tension: the lock's own signature, which tells a light chain's string
+#: stiffened onto the meshing (12B, 12A, 10B 8/16 drives without pretension at 200 rpm: 2.95-3.15
+#: x level 3's span sum, 0.96-0.98 f_1) from one carrying next to nothing
+LOCK_BAND = 0.1
 
 
 @dataclass(frozen=True)
@@ -548,8 +558,8 @@ class Monitor:
         self._hanging = None        # (slack span's weight, its mean tension, static) that fired
         self._hang_constants = None
         self._vibration = None      # level 2: (span tension sum, rigid chain's sum) that fired
-        # the span-vibration check needs the breaking load for its floor (VIBRATION_FLOOR):
-        # without one (a pitch no ISO 606 chain has, no chain.breaking_load) it is not made
+        # the span-vibration check's floor (VIBRATION_FLOOR): without a breaking load (a pitch
+        # no ISO 606 chain has, no chain.breaking_load) only the lock's signature (LOCK_BAND)
         self._vibration_floor = None if bl is None else VIBRATION_FLOOR * bl[0]
         self._rigid = None          # rigid_sum's constants, when first needed
         self._input_last = None     # (time, input speed) of the last sample: its acceleration
@@ -795,18 +805,26 @@ class Monitor:
             return
         if self.level > 2:
             return
-        if self.level == 2 and self._vibration_floor is not None:
+        if self.level == 2:
             total = (tight_sum + slack_sum) / samples
             rigid = rigid_sum / samples
-            # and by more than a share of the breaking load: a chain carrying next to nothing
-            # (no weight, no pretension) is not a span running away
-            if total > VIBRATION_RATIO * rigid and total - rigid > self._vibration_floor:
+            if total > VIBRATION_RATIO * rigid and (
+                    self._vibration_floor is not None and total - rigid > self._vibration_floor
+                    or self._locked(speed_sum / samples, slack_sum / samples)):
                 self._vibration = (total, rigid)
         if self._hanging is None:
             self._hanging = self._slack_hanging(slack_sum / samples)
         found = self._span_modes(speed_sum / samples, slack_sum / samples)
         if found is not None:
             self._span_found = found
+
+    def _locked(self, speed, slack) -> bool:
+        """Whether the meshing (at mean |driver speed| ``speed``) lies within LOCK_BAND of the
+        slack span's first string mode at its mean tension ``slack``: the signature of a
+        string whose own stretch has tuned it onto the meshing."""
+        f_m = speed * self.drive.n_driver / (2.0 * math.pi)
+        f_1 = drive_string_frequency(self.drive, self.params, slack, speed)
+        return f_1 > 0.0 and abs(f_m / f_1 - 1.0) <= LOCK_BAND
 
     def rigid_sum(self, driver_speed, driven_speed, load, input_acceleration=0.0):
         """What a rigid chain's two spans carry together at a sample [N] (numbers or arrays):
@@ -885,10 +903,14 @@ class Monitor:
             f"level 2 holds {n} string mode{'s' if n > 1 else ''} per span "
             f"(modal.modes), and the meshing ({f_m:.4g} Hz) is {where}: where the spans bow "
             f"in higher modes, level 3's span tensions run higher and this level's may read "
-            f"low (with one mode on the drives measured: up to 13 % on the tight span and 28 % "
-            f"on the slack span; more modes moved xu2010 at 600 rpm either way, its slack span "
-            f"-27 % with one, -6 % with three, +66 % with nine; docs/reduced_models.md, "
-            f"\"Level 2 beyond its modes\"); check against fidelity 3"
+            f"low (with one mode: up to 13 % on the tight span and 28 % on the slack span on "
+            f"the drives first measured, up to 58 % on the spans' sum over a survey of 90 "
+            f"drives of 8-17 teeth at 200-1200 rpm; on a chain without pretension either way, "
+            f"0.14-2.4 x level 3's sum; "
+            f"more modes moved xu2010 at 600 rpm either way, its slack span -27 % with one, "
+            f"-6 % with three, +66 % with nine; docs/reduced_models.md, \"Level 2 beyond its "
+            f"modes\" and \"Level 2's spans locked on the meshing\"); check against "
+            f"fidelity 3"
             + (f", or run below {below:g} rpm" if below >= 1.0 else "")))
 
     def _transient(self, peak: float) -> str:
@@ -994,8 +1016,10 @@ class Monitor:
                 f"{VIBRATION_RATIO:g} x): the stretch of its string modes, locked on the "
                 f"meshing, carries the rest. On an 08A 9/10 drive of 25 links at 600-1200 rpm "
                 f"level 2's span tensions summed to 1.5-5.8 x level 3's, whose own sum was "
-                f"2.2-2.6 x the rigid chain's; take span tensions from level 3 "
-                f"(docs/reduced_models.md, \"Level 2's spans locked on the meshing\")")))
+                f"2.2-2.6 x the rigid chain's; on small sprockets without pretension level 3's "
+                f"spans lock too and level 2 read 0.4-9 x its sum; take span tensions from "
+                f"level 3 (docs/reduced_models.md, \"Level 2's spans locked on the "
+                f"meshing\")")))
         if self.level >= 1:
             half = math.pi / d.n_driven
             slack = self._skip_limit - half

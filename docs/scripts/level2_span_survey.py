@@ -1,0 +1,102 @@
+"""Level 2's spans against level 3's on drives nobody tuned for: what its span warnings say
+where its span tensions are off (docs/reduced_models.md, "Level 2's spans locked on the
+meshing", the twenty-eighth session's survey).
+
+Six chains (08A, 08B, 10B, 12B, 12A, 16B) x five tooth pairs (8/16 of 32 links, 9/10 of 25,
+11/33 of 44, 13/26 of 40, 17/34 of 48, each wrapping tightly) x 200, 600 and 1200 rpm, no load,
+sprockets as steel discs (`chainmodel new-scene`'s), 1 s runs with its 0.05 s ramp; without
+pretension (``none``, the default) or at `new-scene`'s 2 % of the breaking load
+(``pretension``). Per drive: the spans' mean tension sum over 0.6-1 s at levels 2 and 3, each
+against a rigid chain's (``Monitor.rigid_sum``: twice the static tension or the driven
+sprocket's tension difference, plus the centrifugal tension), and level 2's span warnings
+(``span_vibration``, ``span_modes_beyond``), with the meshing frequency over the slack
+span's first string mode at level 2's mean slack tension (fm/f1; seed 004 eq 61). The summary counts the drives where level 2's sum is
+off level 3's by more than a factor 1.5 either way, and which of them are warned.
+
+    python docs/scripts/level2_span_survey.py              # about 3 min with warm kernels
+    python docs/scripts/level2_span_survey.py pretension
+
+It reads the public API and chainmodel.validity.Monitor, so it runs on an older checkout too.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import chainmodel
+from chainmodel.new_scene import scene_text
+from chainmodel.models.limits import drive_string_frequency
+from chainmodel.validity import Monitor
+
+CHAINS = ("08A", "08B", "10B", "12B", "12A", "16B")
+TEETH = ((8, 16, 32), (9, 10, 25), (11, 33, 44), (13, 26, 40), (17, 34, 48))
+SPEEDS = (200.0, 600.0, 1200.0)
+SPAN_CODES = ("span_vibration", "span_modes_beyond")
+#: level 2's span sum is called off where it is more than this factor from level 3's
+OFF = 1.5
+
+
+def run(path, level):
+    """(span sum, rigid chain's sum) over 0.6-1 s, the run's problem codes and the meshing
+    frequency over the slack span's first string mode at the run's mean slack tension."""
+    r = chainmodel.simulate(path, fidelity=level)
+    m = r.time >= 0.6
+    total = float(np.mean(r["tight_span.tension"][m] + r["slack_span.tension"][m]))
+    sc = r.scene
+    rigid = Monitor(sc.drive, sc.parameters, level).rigid_sum(
+        r["driver.speed"][m], r["driven.speed"][m], sc.operating.load_torque)
+    speed = float(np.mean(np.abs(r["driver.speed"][m])))
+    f_1 = drive_string_frequency(sc.drive, sc.parameters,
+                                 float(np.mean(r["slack_span.tension"][m])), speed)
+    f_m = speed * sc.drive.n_driver / (2.0 * np.pi)
+    return total, float(np.mean(rigid)), [p.code for p in r.problems], f_m / f_1
+
+
+def main(which):
+    static = 0.0 if which == "none" else None
+    folder = tempfile.mkdtemp()
+    print(f"{'drive':>22s} {'rpm':>5s} {'level 2 [N] (x rigid)':>22s} "
+          f"{'level 3 [N] (x rigid)':>22s} {'2 / 3':>6s} {'fm/f1':>6s}  level 2's span warnings")
+    off = warned_off = warned_fine = fine = 0
+    silent = []
+    for chain in CHAINS:
+        for z1, z2, links in TEETH:
+            for rpm in SPEEDS:
+                path = os.path.join(folder, f"{chain}_{z1}_{z2}_{rpm:g}.toml")
+                with open(path, "w") as f:
+                    f.write(scene_text(z1, z2, rpm, 0.0, chain=chain, links=links,
+                                       static_tension=static, duration=1.0))
+                s2, g2, codes, share = run(path, 2)
+                s3, g3, _, _ = run(path, 3)
+                said = [c for c in codes if c in SPAN_CODES]
+                ratio = s2 / s3
+                bad = ratio > OFF or ratio < 1.0 / OFF
+                off += bad
+                warned_off += bad and bool(said)
+                warned_fine += (not bad) and bool(said)
+                fine += not bad
+                label = f"{chain} {z1}/{z2}, {links} links"
+                if bad and not said:
+                    silent.append(f"{label} at {rpm:g} rpm ({ratio:.2f} x)")
+                print(f"{label:>22s} {rpm:5g} {s2:10.1f} ({s2 / g2:5.2f} x) "
+                      f"{s3:10.1f} ({s3 / g3:5.2f} x) {ratio:6.2f} {share:6.2f}  "
+                      f"{', '.join(said) or '-'}{'   <- off, silent' if bad and not said else ''}",
+                      flush=True)
+    print(f"\n{off + fine} drives; level 2's span sum off level 3's by more than {OFF:g} x "
+          f"on {off}, of which {warned_off} carry a span warning; {warned_fine} of the other "
+          f"{fine} carry one too")
+    print("off and silent: " + ("; ".join(silent) or "none"))
+
+
+if __name__ == "__main__":
+    start = time.perf_counter()
+    args = sys.argv[1:] or ["none"]
+    if args[0] not in ("none", "pretension"):
+        sys.exit(f"unknown case {args[0]!r}; choose none or pretension")
+    main(args[0])
+    print(f"wall {time.perf_counter() - start:.0f} s")
