@@ -69,9 +69,10 @@ LEVEL2_TEXT = "string mode per span (modal.modes)"
                                       ("C1", 400.0)])
 def test_level2_warns_where_the_meshing_reaches_the_second_string_mode(name, rpm):
     """Level 2 holds one string mode per span by default: it warns where the meshing reaches
-    LEVEL2_SPAN_MODE_RATIO = 2 x the slack span's first string mode (its second mode), f_1
-    computed here as above at level 2's own mean slack tension; points at least 15 % away from
-    the line (xu2010 60 rpm and C1 100 rpm below it, xu2010 600 rpm and C1 400 rpm above)."""
+    LEVEL2_SPAN_MODE_RATIO = 1.5 x the slack span's first string mode (its second harmonic on
+    the third mode), f_1 computed here as above at level 2's own mean slack tension; points at
+    least 15 % away from the line (xu2010 60 rpm and C1 100 rpm below it, xu2010 600 rpm and
+    C1 400 rpm above)."""
     from chainmodel.validity import LEVEL2_SPAN_MODE_RATIO
     r = _run(name, 2, rpm)
     d = load_scene(name).drive
@@ -188,3 +189,30 @@ def test_both_paths_agree_at_every_length_of_a_run_on_the_line():
         sc.drive, sc.parameters, 1, r.time[:n], {k: v[:n] for k, v in outputs.items()},
         36.0 * math.pi / 30)) for n in cuts]
     assert whole == [said[n - 1] for n in cuts]
+
+
+def test_level2_warns_where_it_reads_low_below_the_second_string_mode(tmp_path):
+    """The gap the twenty-fifth session's line (2 f_1) left: a 12A 8/16 drive of 32 links at
+    2 % pretension (`new-scene`'s) at 600 rpm lies at about 1.7 f_1, where level 2 reads both
+    spans more than 3 % / 6 % low against level 3 (the criterion the line was drawn on,
+    checked here from both runs); it is warned, and f_1 at level 2's mean slack tension, computed
+    here, lies at least 10 % above the line (docs/reduced_models.md, "Level 2 beyond its
+    modes")."""
+    from chainmodel.new_scene import scene_text
+    from chainmodel.validity import LEVEL2_SPAN_MODE_RATIO
+
+    path = tmp_path / "12a.toml"
+    path.write_text(scene_text(8, 16, 600.0, 0.0, chain="12A", links=32, duration=1.0))
+    runs = {level: chainmodel.simulate(str(path), fidelity=level) for level in (2, 3)}
+    m = runs[2].time >= 0.6
+    tight = {k: float(np.mean(r["tight_span.tension"][m])) for k, r in runs.items()}
+    slack = {k: float(np.mean(r["slack_span.tension"][m])) for k, r in runs.items()}
+    assert tight[2] < 0.97 * tight[3] and slack[2] < 0.94 * slack[3], (tight, slack)
+    d = runs[2].scene.drive
+    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
+    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
+    c2 = slack[2] / (runs[2].scene.parameters["chain.link_mass"] / d.pitch)
+    v = d.n_driver * d.pitch * 600.0 / 60.0
+    ratio = (d.n_driver * 600.0 / 60.0) / ((c2 - v * v) / (2.0 * length * math.sqrt(c2)))
+    assert 1.1 * LEVEL2_SPAN_MODE_RATIO < ratio < 2.0, ratio
+    assert "span_modes_beyond" in [q.code for q in runs[2].problems]

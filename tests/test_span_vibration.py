@@ -227,3 +227,7 @@ def test_a_light_chain_locked_on_the_meshing_is_warned():
     for t, row, w, q in zip(r2.time, np.column_stack([r2[n] for n in names]), speed, load):
         said += one.update(t, row, w, q)
     assert sum("vibrate beyond its string model" in m for m in said) == 1
+    # the span-modes warning fires too, earlier: the sample-by-sample path reports the second
+    # span problem as well (it had reported only the first span problem of a run)
+    assert "span_modes_beyond" in [q.code for q in r2.problems]
+    assert sum("string mode per span (modal.modes)" in m for m in said) == 1

@@ -47,7 +47,7 @@ def main(argv=None):
     u10b, u12b = folder / "10b_11_33.toml", folder / "12b_19_57.toml"
     u10b.write_text(scene_text(11, 33, 600.0, 20.0, chain="10B", name="10B 11/33"))
     u12b.write_text(scene_text(19, 57, 300.0, 100.0, chain="12B", name="12B 19/57"))
-    cases = ([("xu2010", r) for r in (15, 30, 45, 60, 120, 600, 2000)]
+    cases = ([("xu2010", r) for r in (15, 30, 45, 60, 75, 90, 120, 600, 2000)]
              + [("C1", r) for r in (30, 45, 60, 100, 400)]
              + [(MIXER, r) for r in (100, 200, 500)] + [(FAN, 600), (CONVEYOR, 300),
                                                          (str(u10b), 300), (str(u10b), 600),
