@@ -89,7 +89,11 @@ def _rule(rows, features, figures, target, accepted_levels):
     (config, its error, met, promised): promised when met and at least half of the error is
     the level's own (against the nominal reference), or the drive is a measured scene itself;
     a ripple figure (speed and torque ripple, mesh amplitude, transmission error) only from
-    two neighbours at least."""
+    two neighbours at least; a span tension of levels 0-2 only where the meshing lies below
+    the level's span-modes warning line (chainmodel.validity: 0.4 of the first string mode at
+    levels 0-1, 1.5 at level 2), that mode taken at the static tension (mesh_over_span)."""
+    from chainmodel.validity import LEVEL2_SPAN_MODE_RATIO, SPAN_MODE_SHARE
+    line = {0: SPAN_MODE_SHARE, 1: SPAN_MODE_SHARE, 2: LEVEL2_SPAN_MODE_RATIO}
     sources = {}
     for r in rows:
         if r["status"] == "ok" and not r["reference_problems"]:
@@ -115,8 +119,11 @@ def _rule(rows, features, figures, target, accepted_levels):
             return c, worst[c], True, True
         ripple = any(f in ("driven_speed_ripple", "input_torque_ripple", "mesh_amplitude",
                            "transmission_error") for f in figures)
+        spans = any(f.endswith(("tight_tension", "slack_tension")) for f in figures)
+        bowing = (spans and best["level"] in line
+                  and features["mesh_over_span"] >= line[best["level"]])
         return c, worst[c], True, (nominal[c] >= 0.5 * worst[c]
-                                   and not (ripple and seen[c] < 2))
+                                   and not (ripple and seen[c] < 2) and not bowing)
     best = min(cands, key=lambda r: (seen[r["config"]] < len(near), worst[r["config"]],
                                      r["wall_per_sim_s"]))
     return best["config"], worst[best["config"]], False, False
@@ -186,20 +193,51 @@ _UNSEEN = Path(__file__).resolve().parents[1] / "docs" / "scripts" / "unseen_dri
     ((str(_EXAMPLES / "16b_mixer.toml"), dict(input_speed_rpm=150, duration=0.6)),
      ["slack_span.tension"], 0.5),
 ])
-def test_auto_promise_holds_within_2x_on_drives_not_in_the_table(scene_kw, outputs, accuracy):
-    """fidelity='auto' promises an error on a drive outside its table; here the chosen
-    configuration's real error is measured against level 3 with its band run in this test
-    (short runs), and the promise must hold within 2x."""
+def test_auto_does_not_promise_span_tensions_where_its_level_warns_of_missing_span_modes(
+        scene_kw, outputs, accuracy):
+    """Three drives outside the table on which auto promised level 1's span tensions from the
+    16B mixer at 200 rpm (held there, 0.4-0.8x the promise): their meshing is far above 0.4 of
+    the spans' first string mode, where level 1 itself warns that its span tensions may be
+    off. A wider audit found such promises 2-17x off on 37 of 61 new drives (the next test
+    measures one): the choice stands, the promise is not made, and the message says why. The
+    string mode is computed here from the taut string at the static tension."""
     name, kw = scene_kw
     sc = load_scene(name, **kw)
-    feats = auto.scene_features(sc)
-    assert all(math.dist(_log_features(feats), _log_features(r)) > 1e-3 for r in auto.table())
+    assert all(math.dist(_log_features(auto.scene_features(sc)), _log_features(r)) > 1e-3
+               for r in auto.table())
     choice = auto.choose(sc, outputs, accuracy)
-    assert choice.promised and choice.met and "promised" in choice.message, choice.message
+    d = sc.drive
+    rho = sc.parameters["chain.link_mass"] / d.pitch
+    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
+    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
+    t0 = sc.with_overrides(fidelity=0).model().static_tension()
+    f_1 = math.sqrt(t0 / rho) / (2.0 * length)
+    f_m = d.n_driver * kw["input_speed_rpm"] / 60.0
+    assert choice.level == 1 and choice.met and f_m > 2.0 * 0.4 * f_1, (f_m, f_1)
+    assert not choice.promised and "miss string modes" in choice.why_not
+    assert "cannot promise" in choice.message
+
+
+def test_auto_would_have_broken_its_promise_where_span_modes_are_missing(tmp_path):
+    """A `new-scene` 16B 11/33 drive of 44 links at 2 % pretension, 600 rpm, loaded to its
+    static tension: before, auto promised level 1's 11.5 % on the tight span from the 16B
+    mixer at 200 rpm (distance under 1). Measured here against level 3 and its band (run in
+    the test), level 1 is more than twice that off, so the promise would have broken; it is
+    not made now."""
+    from chainmodel.new_scene import scene_text
+    path = tmp_path / "16b.toml"
+    path.write_text(scene_text(11, 33, 600.0, 0.0, chain="16B", links=44))
+    sc0 = load_scene(str(path), fidelity=0)
+    load = sc0.model().static_tension() * sc0.drive.driven.pitch_radius
+    path.write_text(scene_text(11, 33, 600.0, round(load, 3), chain="16B", links=44,
+                               duration=0.3))
+    sc = load_scene(str(path))
+    choice = auto.choose(sc, ["tight_span.tension"], 0.2)
+    assert choice.level == 1 and choice.met and choice.distance <= 1.0
+    assert not choice.promised and "miss string modes" in choice.why_not
     chosen = study.metrics(run_scene(sc.with_overrides(**choice.overrides)))
-    figures = [f for o in outputs for f in auto.OUTPUT_FIGURES[o]]
-    measured = _band_worst(chosen, _level3_band(sc), figures)
-    assert measured <= 2.0 * choice.expected_error, (measured, choice.message)
+    measured = _band_worst(chosen, _level3_band(sc), auto.OUTPUT_FIGURES["tight_span.tension"])
+    assert measured > 2.0 * choice.expected_error, (measured, choice.expected_error)
 
 
 def test_auto_declines_to_promise_a_ripple_figure_measured_on_one_neighbour_only():
@@ -207,13 +245,16 @@ def test_auto_declines_to_promise_a_ripple_figure_measured_on_one_neighbour_only
     where level 1's driven-speed ripple is within 50 %; the same figure is 58 % off at 500
     rpm, and was 4.5x the promise at 100 rpm when promised from 200 rpm. A ripple figure's
     error follows where the meshing sits against the drive's modes: one scene does not carry
-    it, so auto says it cannot promise (the tension is still promised from it)."""
+    it, so auto says it cannot promise (nor, since the twenty-eighth session, the tension:
+    level 1's span tensions above its span-modes line)."""
     sc = load_scene(str(_EXAMPLES / "16b_mixer.toml"), input_speed_rpm=100)
     ripple = auto.choose(sc, ["driven.speed"], 0.5)
     assert ripple.met and not ripple.promised and len(ripple.neighbours) == 1
     assert "ripple figure" in ripple.why_not and "cannot promise" in ripple.message
     tension = auto.choose(sc, ["tight_span.tension"], 0.5)
-    assert tension.promised and tension.neighbours == ripple.neighbours
+    assert tension.met and tension.neighbours == ripple.neighbours
+    # nor the tension: level 1 far above its spans' first string mode warns of missing modes
+    assert not tension.promised and "miss string modes" in tension.why_not
 
 
 def test_auto_promises_on_a_measured_scene_itself_whose_band_was_measured():
