@@ -167,14 +167,7 @@ def test_a_start_ramp_is_not_a_vibration():
     sum after the ramp is level 3's within 10 %, and it is not warned. Premise: over the
     judged samples to the ramp's end the spans' sum is more than VIBRATION_RATIO x the rigid
     chain's without the inertia torque (the old rule fired there), less with it."""
-    from chainmodel.new_scene import scene_text
-
-    path = os.path.join(tempfile.mkdtemp(), "16b.toml")
-    with open(path, "w") as f:
-        f.write(scene_text(17, 34, 600.0, 0.0, chain="16B", links=48, static_tension=0.0,
-                           duration=0.6))
-    r2 = chainmodel.simulate(path, fidelity=2)
-    r3 = chainmodel.simulate(path, fidelity=3)
+    r2, r3 = _levels_2_3_without_pretension("16B", 17, 34, 48, 600.0, 0.6)
     sc = r2.scene
     _, speed, acc, _ = sc.input_arrays(r2.time)
     turned = (r2["driver.angle"] - r2["driver.angle"][0]) / (2 * math.pi / 17)
@@ -188,6 +181,17 @@ def test_a_start_ramp_is_not_a_vibration():
     assert np.mean(total[judged]) < VIBRATION_RATIO * with_inertia
     assert _sum_after(r2, 0.3) == pytest.approx(_sum_after(r3, 0.3), rel=0.10)
     assert "span_vibration" not in [q.code for q in r2.problems]
+
+
+def _levels_2_3_without_pretension(chain, z1, z2, links, rpm, duration):
+    """Levels 2 and 3 on a `new-scene` drive (steel-disc sprockets, 0.05 s ramp) of no
+    pretension and no load."""
+    from chainmodel.new_scene import scene_text
+    path = os.path.join(tempfile.mkdtemp(), f"{chain}.toml")
+    with open(path, "w") as f:
+        f.write(scene_text(z1, z2, rpm, 0.0, chain=chain, links=links, static_tension=0.0,
+                           duration=duration))
+    return chainmodel.simulate(path, fidelity=2), chainmodel.simulate(path, fidelity=3)
 
 
 def _sum_after(r, t0):
@@ -204,15 +208,9 @@ def test_a_light_chain_locked_on_the_meshing_is_warned():
     sample alike. Premises: level 2's sum over 0.6-1 s more than twice level 3's; the excess
     under the floor."""
     from chainmodel.models import ALL_OUTPUTS
-    from chainmodel.new_scene import scene_text
     from chainmodel.validity import VIBRATION_FLOOR, breaking_load
 
-    path = os.path.join(tempfile.mkdtemp(), "12b.toml")
-    with open(path, "w") as f:
-        f.write(scene_text(8, 16, 200.0, 0.0, chain="12B", links=32, static_tension=0.0,
-                           duration=1.0))
-    r2 = chainmodel.simulate(path, fidelity=2)
-    r3 = chainmodel.simulate(path, fidelity=3)
+    r2, r3 = _levels_2_3_without_pretension("12B", 8, 16, 32, 200.0, 1.0)
     assert _sum_after(r2, 0.6) > 2.0 * _sum_after(r3, 0.6)
     sc = r2.scene
     found = [q for q in r2.problems if q.code == "span_vibration"]
