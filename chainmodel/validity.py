@@ -89,11 +89,11 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   filled the gap: every run where level 2 read more than 3 % low on the tight span or 6 % low
   on the slack span lies at f_m / f_1 >= 1.60 (up to 18 % low below 2), and below 1.5 only two
   runs on the first mode itself fail (a 12B 8/16 at 600 rpm, 0.94, +10 %; a 12B 17/34 at 200
-  rpm, 0.97, -3.3 %); xu2010 at
-  90 rpm, 1.65, reads its slack span 6.7 % low. Above the line it also passes on some (the
-  08B fan at 600 rpm, 13.2), so the warning says "may". More modes are no cure to promise: on
-  xu2010 at 600 rpm three bring the slack span from -27 to -6 %, nine take it to +66 %. The
-  line is kept whatever ``modal.modes``, the only count measured across the drives.
+  rpm, 0.97, -3.3 %); xu2010 at 90 rpm, 1.65, reads its slack span 6.7 % low. Above the line
+  it also passes on some (the 08B fan at 600 rpm, 13.2), so the warning says "may". More
+  modes are no cure to promise: on xu2010 at 600 rpm three bring the slack span from -27 to
+  -6 %, nine take it to +66 %. The line is kept whatever ``modal.modes``, the only count
+  measured across the drives.
 * **span vibration** (level 2): its spans' mean tension sum, over the same samples and
   judged at the same instants as the span-modes check, against a rigid chain's, sample by
   sample (twice the static tension, or the driven sprocket's tension difference |load +
@@ -108,10 +108,10 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   258 N over the rigid chain's, under the 12B's 289 N floor, at 0.96 f_1); the band alone
   would not tell a chain carrying next to nothing (no weight, no pretension: any tension is
   many times its rigid sum) from a locked one. Without a breaking load (a pitch no ISO 606
-  chain has and no chain.breaking_load) only the band counts. On an 08A 9/10 drive of 25 links level 2 read 1.5-5.8 x level
-  3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x the rigid chain's); on the trade study's
-  scenes level 2 reads 1.1-1.6 x and level 3 1.2-1.7 x (docs/reduced_models.md, "Level 2's
-  spans locked on the meshing").
+  chain has and no chain.breaking_load) only the band counts. On an 08A 9/10 drive of 25
+  links level 2 read 1.7-5.5 x level 3's sum at 600-1200 rpm (level 3 itself 2.2-2.6 x the
+  rigid chain's); on the trade study's scenes level 2 reads 1.1-1.5 x and level 3 1.2-1.8 x
+  (docs/reduced_models.md, "Level 2's spans locked on the meshing").
 * **driven-speed reversal** (levels 1-3): the driven sprocket turning against the input's
   direction (by more than REVERSAL_SPEED) under forward drive: once the driver has turned one
   tooth in the input's present direction (the release of level 3's initial layout is over by
@@ -182,8 +182,8 @@ VIBRATION_RATIO = 3.0
 VIBRATION_FLOOR = 0.01
 #: ... or the meshing lies within this share of the slack span's first string mode at the
 #: spans' running tension: the lock's own signature, which tells a light chain's string
-#: stiffened onto the meshing (12B, 12A, 10B 8/16 drives without pretension at 200 rpm: 2.95-3.15
-#: x level 3's span sum, 0.96-0.98 f_1) from one carrying next to nothing
+#: stiffened onto the meshing (12B, 12A, 10B 8/16 drives without pretension at 200 rpm:
+#: 2.95-3.15 x level 3's span sum, 0.96-0.98 f_1) from one carrying next to nothing
 LOCK_BAND = 0.1
 
 
@@ -1022,7 +1022,7 @@ class Monitor:
                 f"warned from "
                 f"{VIBRATION_RATIO:g} x): the stretch of its string modes, locked on the "
                 f"meshing, carries the rest. On an 08A 9/10 drive of 25 links at 600-1200 rpm "
-                f"level 2's span tensions summed to 1.5-5.8 x level 3's, whose own sum was "
+                f"level 2's span tensions summed to 1.7-5.5 x level 3's, whose own sum was "
                 f"2.2-2.6 x the rigid chain's; on small sprockets without pretension level 3's "
                 f"spans lock too and level 2 read 0.4-9 x its sum; take span tensions from "
                 f"level 3 (docs/reduced_models.md, \"Level 2's spans locked on the "
