@@ -101,7 +101,7 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   slack span at the weight's floor where more, plus both spans' centrifugal tension rho v^2;
   seed 004 eqs 15-16). A warning at :data:`VIBRATION_RATIO` = 3 x and either by more than
   :data:`VIBRATION_FLOOR` = 1 % of the breaking load or with the meshing within
-  :data:`LOCK_BAND` = 10 % of the slack span's first string mode at its running mean
+  :data:`LOCK_BAND` = 20 % of the slack span's first string mode at its running mean
   tension (seed 004 eq 61): there level 2's string mode, stiffened by its own stretch, has
   followed the meshing up and its stretch carries most of the tension. The floor alone let
   light chains through (a 12B 8/16 drive without pretension at 200 rpm: 3.15 x level 3's sum,
@@ -183,8 +183,11 @@ VIBRATION_FLOOR = 0.01
 #: ... or the meshing lies within this share of the slack span's first string mode at the
 #: spans' running tension: the lock's own signature, which tells a light chain's string
 #: stiffened onto the meshing (12B, 12A, 10B 8/16 drives without pretension at 200 rpm:
-#: 2.95-3.15 x level 3's span sum, 0.96-0.98 f_1) from one carrying next to nothing
-LOCK_BAND = 0.1
+#: 2.95-3.15 x level 3's span sum, 0.96-0.98 f_1) from one carrying next to nothing; 20 %, not
+#: 10 %, for two 9/10 drives at 0.83-0.88 f_1 whose spans level 2 read 7-21 % off (every
+#: drive of the survey with a sum of 3 x a rigid chain's is one without pretension, and each
+#: of those failed 3 % / 6 % per span: docs/reduced_models.md, "Per span, every level below 3")
+LOCK_BAND = 0.2
 
 
 @dataclass(frozen=True)
