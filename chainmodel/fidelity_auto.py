@@ -113,8 +113,7 @@ RIPPLE_FIGURES = ("driven_speed_ripple", "input_torque_ripple", "mesh_amplitude"
 #: scene: an audit of 60 `new-scene` drives at 200-600 rpm loaded to their static tension had
 #: level 1 promise 11.5 % on the tight span and miss by 2-17x on 37 of 61 promised cases
 #: (docs/tradeoff.md, "Auditing the promise")
-SPAN_FIGURES = ("mean_tight_tension", "peak_tight_tension", "mean_slack_tension",
-                "peak_slack_tension")
+SPAN_FIGURES = OUTPUT_FIGURES["tight_span.tension"] + OUTPUT_FIGURES["slack_span.tension"]
 SPAN_LINES = {0: SPAN_MODE_SHARE, 1: SPAN_MODE_SHARE, 2: LEVEL2_SPAN_MODE_RATIO}
 RIPPLE_NEIGHBOURS = 2
 

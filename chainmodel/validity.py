@@ -809,32 +809,36 @@ class Monitor:
         span's first string frequency [Hz], mean slack tension [N]) when the meshing reaches
         SPAN_MODE_SHARE of that frequency. Level 2: keeps (the spans' mean tension sum, the
         rigid chain's [N], both means over the samples) when the first is VIBRATION_RATIO
-        times the second and above it by VIBRATION_FLOOR of the breaking load. A verdict
-        that fired stays (a warning is not taken back, as in the FMU's log)."""
+        times the second and above it by VIBRATION_FLOOR of the breaking load, or with the
+        meshing within LOCK_BAND of that string frequency (the lock's signature: the string's
+        own stretch has tuned it onto the meshing). A verdict that fired stays (a warning is
+        not taken back, as in the FMU's log)."""
         if not samples or periods < SPAN_JUDGE_PERIODS:
             return
         if self.level > 2:
             return
+        speed, slack = speed_sum / samples, slack_sum / samples
+        f_m, f_1 = self._frequencies(speed, slack)
         if self.level == 2:
             total = (tight_sum + slack_sum) / samples
             rigid = rigid_sum / samples
+            locked = f_1 > 0.0 and abs(f_m / f_1 - 1.0) <= LOCK_BAND
             if total > VIBRATION_RATIO * rigid and (
                     self._vibration_floor is not None and total - rigid > self._vibration_floor
-                    or self._locked(speed_sum / samples, slack_sum / samples)):
+                    or locked):
                 self._vibration = (total, rigid)
         if self._hanging is None:
-            self._hanging = self._slack_hanging(slack_sum / samples)
-        found = self._span_modes(speed_sum / samples, slack_sum / samples)
-        if found is not None:
-            self._span_found = found
+            self._hanging = self._slack_hanging(slack)
+        line = LEVEL2_SPAN_MODE_RATIO if self.level == 2 else SPAN_MODE_SHARE
+        if f_m > 0.0 and f_m >= line * f_1:
+            self._span_found = (f_m, f_1, slack)
 
-    def _locked(self, speed, slack) -> bool:
-        """Whether the meshing (at mean |driver speed| ``speed``) lies within LOCK_BAND of the
-        slack span's first string mode at its mean tension ``slack``: the signature of a
-        string whose own stretch has tuned it onto the meshing."""
+    def _frequencies(self, speed, slack) -> tuple[float, float]:
+        """(meshing frequency, the slack span's first string frequency) [Hz] at mean |driver
+        speed| ``speed`` and mean slack tension ``slack``; f_1 is 0 where the slack span carries
+        no more than its centrifugal tension (every meshing frequency is then above its modes)."""
         f_m = speed * self.drive.n_driver / (2.0 * math.pi)
-        f_1 = drive_string_frequency(self.drive, self.params, slack, speed)
-        return f_1 > 0.0 and abs(f_m / f_1 - 1.0) <= LOCK_BAND
+        return f_m, drive_string_frequency(self.drive, self.params, slack, speed)
 
     def rigid_sum(self, driver_speed, driven_speed, load, input_acceleration=0.0):
         """What a rigid chain's two spans carry together at a sample [N] (numbers or arrays):
@@ -879,21 +883,6 @@ class Monitor:
         if weight < SLACK_HANGING_SHARE * max(slack, 0.0):
             return None
         return weight, slack, static
-
-    def _span_modes(self, speed, slack):
-        """(f_m, f_1, slack) at mean |driver speed| ``speed`` and mean slack tension ``slack``
-        when f_m >= SPAN_MODE_SHARE f_1 (levels 0-1; LEVEL2_SPAN_MODE_RATIO f_1 at level 2),
-        else None."""
-        d = self.drive
-        f_m = speed * d.n_driver / (2.0 * math.pi)
-        if not f_m > 0.0:
-            return None
-        # 0 Hz where the slack span carries no more than its centrifugal tension: every
-        # meshing frequency is then above its modes
-        f_1 = drive_string_frequency(d, self.params, slack, speed)
-        if f_m < (LEVEL2_SPAN_MODE_RATIO if self.level == 2 else SPAN_MODE_SHARE) * f_1:
-            return None
-        return f_m, f_1, slack
 
     def _span_line(self, f_m, f_1, slack, share) -> tuple[str, float]:
         """The span-modes warnings' shared parts: where the meshing f_m lies against the slack

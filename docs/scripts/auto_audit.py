@@ -77,10 +77,10 @@ def new_drives(folder: Path, load_share: float = 1.0) -> tuple:
     """The ``--new-drives`` drives (module docstring), their scene files written to
     ``folder``, in the form of :data:`DRIVES`."""
     from chainmodel.new_scene import scene_text
+    from level2_span_survey import TEETH       # the span survey's tooth pairs (same folder)
     out = []
     for chain in ("10B", "16B", "12B"):
-        for z1, z2, links in ((8, 16, 32), (9, 10, 25), (11, 33, 44), (13, 26, 40),
-                              (17, 34, 48)):
+        for z1, z2, links in TEETH:
             for rpm in (200, 600):
                 for static, tag in ((0.0, "no pretension"), (None, "2 % pretension")):
                     kind = "none" if static == 0 else "pre"
