@@ -471,3 +471,34 @@ def test_no_span_below_the_hanging_floor_and_the_torque_balance_kept(floor, ks):
     assert above.any() and (~above).any()
     np.testing.assert_array_equal(t_pull[above], free[0][above])
     np.testing.assert_array_equal(t_back[above], free[1][above])
+
+
+@pytest.mark.parametrize("name", ["xu2010", "C1"])
+def test_quasi_static_spans_balance_the_torque_on_the_pitch_radius(name):
+    """Level 0's spans where they do not vibrate (KinematicModel.quasi_static_spans, what
+    level 2's span-modes line is judged at: chainmodel.validity): on the seat ladder's linear
+    law without sag (seed 004 eqs 15-16) the spans share the static sum and the torque,
+    T = T0 +- M / (2 R_o), written here; with the default law (wrap fit, sag) the torque
+    balance holds exactly, no load leaves both spans at the held tension, the slack span falls
+    as the load rises and never below the weight's floor (span_sag.hanging_tension)."""
+    d = chainmodel.preset(name)
+    r = d.driven.pitch_radius
+    linear = _model(d, **{"torsional.wrap_statics": False, "torsional.sag_lag": False,
+                          "gravity": 0.0})
+    t0 = linear.static_tension()
+    for load in (0.0, 0.25 * t0 * r, t0 * r):
+        pull, back = linear.quasi_static_spans(load)
+        assert pull == pytest.approx(t0 + load / (2 * r), rel=1e-12)
+        assert back == pytest.approx(t0 - load / (2 * r), rel=1e-12, abs=1e-9 * t0)
+    m = chainmodel.load_scene(name, fidelity=0).model()
+    held = m.held_tension()
+    pull, back = m.quasi_static_spans(0.0)
+    assert pull == pytest.approx(held, rel=1e-9) and back == pytest.approx(held, rel=1e-9)
+    floor = hanging_tension(d, m.params)
+    backs = []
+    for load in np.linspace(0.0, 4.0 * held * r, 9)[1:]:
+        pull, back = m.quasi_static_spans(load)
+        assert (pull - back) * r == pytest.approx(load, rel=1e-9)
+        assert back >= floor * (1 - 1e-12)
+        backs.append(back)
+    assert np.all(np.diff(backs) <= 1e-9 * held) and backs[0] < held

@@ -43,6 +43,7 @@ TWINS = (
     "rk4_loop.omega_estimate",
     "kinematic.driven_rotation",
     "kinematic.level0_outputs",
+    "kinematic.split",
     "equilibrium.static_state",
     "multibody_forces.accelerations",
     "multibody_outputs.span_ends",

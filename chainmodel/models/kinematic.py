@@ -198,6 +198,17 @@ class KinematicModel(Model):
         sag = sum(self._sag_ks) / (t * t) if t > 0 else 0.0
         return 2.0 * raw_tension(t, self._floor) - sag
 
+    def quasi_static_spans(self, load: float) -> tuple[float, float]:
+        """(pulling, back) span tensions [N] of this level's rigid chain carrying the driven
+        torque ``load`` [N m] (load, damping and inertia torques together) on arms of the
+        driven pitch radius, centrifugal tension left out: the spans' law and raw sum of
+        :meth:`evaluate` (seed 004 eqs 15-16 with the sag and floor of levels 1-2) without the
+        polygon's swing of the arms, what the spans hold where they do not vibrate
+        (chainmodel.validity judges level 2's span-modes line at it)."""
+        from ..kernels.kinematic import split
+        r = self.drive.driven.pitch_radius
+        return split(self._raw_sum, self._floor, r, r, float(load), *self._sag_ks, self._hang)
+
     def output_descriptions(self) -> dict[str, str]:
         d = super().output_descriptions()
         for name in ("tight_span.tension", "slack_span.tension", "input_shaft.torque"):
