@@ -93,7 +93,15 @@ Checks and their thresholds (each from a standard, the model's own law or geomet
   it also passes on some (the 08B fan at 600 rpm, 13.2), so the warning says "may". More
   modes are no cure to promise: on xu2010 at 600 rpm three bring the slack span from -27 to
   -6 %, nine take it to +66 %. The line is kept whatever ``modal.modes``, the only count
-  measured across the drives.
+  measured across the drives. Since the twenty-ninth session f_1 is taken at the lower of
+  level 2's own mean slack tension and the one its spans hold where they do not vibrate
+  (level 0's quasi-static split of the mean load, plus the centrifugal tension): where level
+  2's spans vibrate, their stretch lifts its own slack tension and with it its own string
+  mode, so that judged on its own mean the meshing fell back below the line where level 3's
+  spans bow beyond it (an audit's 08A 9/10 drive without pretension at 450 rpm: 1.23 f_1 at
+  level 2's own 94 N, 1.65 at level 3's 53 N, level 2's spans +16 / +78 %, silent; the 12B
+  8/16 above, +10 %, is warned at 1.56 f_1 at 517 N against its own 809 N). On the survey's
+  90 drives with pretension no run within 3 % / 6 % gained the warning.
 * **span vibration** (level 2): its spans' mean tension sum, over the same samples and
   judged at the same instants as the span-modes check, against a rigid chain's, sample by
   sample (twice the static tension, or the driven sprocket's tension difference |load +
@@ -515,8 +523,9 @@ class _Stats:
     slack_sum: float = 0.0         # slack-span tension and driver speed summed over the
     speed_sum: float = 0.0         # samples once the driver has turned a tooth (levels 0-1)
     span_samples: int = 0
-    tight_sum: float = 0.0         # tight-span tension and the rigid chain's span sum over the
-    rigid_sum: float = 0.0         # same samples (level 2's span-vibration check)
+    tight_sum: float = 0.0         # tight-span tension, the rigid chain's span sum and the load
+    rigid_sum: float = 0.0         # torque over the same samples (level 2's span-vibration and
+    load_sum: float = 0.0          # span-modes checks)
     span_periods: float = 0.0      # driver tooth periods turned (from the first sample)
     max_load: float = 0.0          # largest |load torque| seen [N m]
 
@@ -563,7 +572,7 @@ class Monitor:
         self._span_ix = (tuple(names.index(n) for n in self._span_need)
                          if self.level <= 2 and names is not None
                          and all(n in names for n in self._span_need) else None)
-        self._span_found = None     # (f_m, f_1, slack) of the last judgement that fired
+        self._span_found = None     # (f_m, f_1, slack, own) of the last judgement that fired
         self._hanging = None        # (slack span's weight, its mean tension, static) that fired
         self._hang_constants = None
         self._vibration = None      # level 2: (span tension sum, rigid chain's sum) that fired
@@ -571,6 +580,7 @@ class Monitor:
         # no ISO 606 chain has, no chain.breaking_load) only the lock's signature (LOCK_BAND)
         self._vibration_floor = None if bl is None else VIBRATION_FLOOR * bl[0]
         self._rigid = None          # rigid_sum's constants, when first needed
+        self._still = None          # _still_slack's model and constants, when first needed
         self._input_last = None     # (time, input speed) of the last sample: its acceleration
 
     # -- sample by sample --------------------------------------------------------------------
@@ -602,11 +612,12 @@ class Monitor:
                     s.rigid_sum += float(self.rigid_sum(float(row[self._span_ix[1]]),
                                                         float(row[b]), float(load_torque),
                                                         acceleration))
+                    s.load_sum += float(load_torque)
                 s.span_samples += 1
                 s.span_periods = max(s.span_periods, turned)
                 if self._k != k:        # judged at each whole driver tooth period
                     self._span_judge(s.speed_sum, s.slack_sum, s.span_samples,
-                                     s.span_periods, s.tight_sum, s.rigid_sum)
+                                     s.span_periods, s.tight_sum, s.rigid_sum, s.load_sum)
                     # each of the three on its own: a second span problem after a first is new
                     span = (self._span_found is not None, self._vibration is not None,
                             self._hanging is not None)
@@ -751,13 +762,13 @@ class Monitor:
         if self.level <= 2 and all(n in outputs for n in self._span_need):
             speed = np.asarray(outputs["driver.speed"], float)
             vibration = self.level == 2         # the tight span and the rigid chain's sum too
+            load = np.broadcast_to(np.asarray(load_torque, float), t.shape)
             self._span_arrays(phi1, k, np.asarray(outputs["slack_span.tension"], float),
-                              np.abs(speed),
+                              np.abs(speed), load,
                               np.asarray(outputs["tight_span.tension"], float) if vibration
                               else None,
-                              self.rigid_sum(speed, w2, np.broadcast_to(
-                                  np.asarray(load_torque, float), t.shape),
-                                  self._input_accelerations(t, np.asarray(w_in, float)))
+                              self.rigid_sum(speed, w2, load, self._input_accelerations(
+                                  t, np.asarray(w_in, float)))
                               if vibration else None)
         if self._last is not None:
             self._crossings(self._last[0], self._last[1], float(phi1[0]), float(te[0]),
@@ -778,7 +789,7 @@ class Monitor:
         self._input_last = (float(t[-1]), float(w_in[-1]))
         return np.where(dt > 0.0, (w_in - w_before) / np.where(dt > 0.0, dt, 1.0), 0.0)
 
-    def _span_arrays(self, phi1, k, slack, speed, tight, rigid):
+    def _span_arrays(self, phi1, k, slack, speed, load, tight, rigid):
         """The span checks' sums of a whole run, judged at every whole driver tooth period as
         :meth:`update` judges them sample by sample (the same samples, the same verdicts)."""
         s = self.stats
@@ -789,36 +800,46 @@ class Monitor:
         if self.level == 2:     # the span-vibration check's sums
             tight_sum = s.tight_sum + np.cumsum(np.where(counted, tight, 0.0))
             rigid_sum = s.rigid_sum + np.cumsum(np.where(counted, rigid, 0.0))
+            load_sum = s.load_sum + np.cumsum(np.where(counted, load, 0.0))
         else:
-            tight_sum = rigid_sum = np.zeros(len(counted))
+            tight_sum = rigid_sum = load_sum = np.zeros(len(counted))
         samples = s.span_samples + np.cumsum(counted)
         turned = np.maximum(s.span_periods, np.maximum.accumulate(np.where(counted, periods,
                                                                            0.0)))
         previous = np.concatenate(([self._k], k[:-1]))
         for i in np.flatnonzero(counted & (k != previous) & (turned >= SPAN_JUDGE_PERIODS)):
             self._span_judge(float(speed_sum[i]), float(slack_sum[i]), int(samples[i]),
-                             float(turned[i]), float(tight_sum[i]), float(rigid_sum[i]))
+                             float(turned[i]), float(tight_sum[i]), float(rigid_sum[i]),
+                             float(load_sum[i]))
         s.slack_sum, s.speed_sum = float(slack_sum[-1]), float(speed_sum[-1])
         s.tight_sum, s.rigid_sum = float(tight_sum[-1]), float(rigid_sum[-1])
+        s.load_sum = float(load_sum[-1])
         s.span_samples, s.span_periods = int(samples[-1]), float(turned[-1])
 
     # -- the findings ----------------------------------------------------------------------------
     def _span_judge(self, speed_sum, slack_sum, samples, periods, tight_sum=0.0,
-                    rigid_sum=0.0):
+                    rigid_sum=0.0, load_sum=0.0):
         """Judge the span checks on these sums. Levels 0-1: keeps (meshing frequency, slack
-        span's first string frequency [Hz], mean slack tension [N]) when the meshing reaches
-        SPAN_MODE_SHARE of that frequency. Level 2: keeps (the spans' mean tension sum, the
-        rigid chain's [N], both means over the samples) when the first is VIBRATION_RATIO
-        times the second and above it by VIBRATION_FLOOR of the breaking load, or with the
-        meshing within LOCK_BAND of that string frequency (the lock's signature: the string's
-        own stretch has tuned it onto the meshing). A verdict that fired stays (a warning is
-        not taken back, as in the FMU's log)."""
+        span's first string frequency [Hz], mean slack tension [N], None) when the meshing
+        reaches SPAN_MODE_SHARE of that frequency. Level 2: the same at
+        LEVEL2_SPAN_MODE_RATIO, with the string frequency at the lower of its mean slack
+        tension and the one its spans hold where they do not vibrate (:meth:`_still_slack`;
+        then the last element is level 2's own mean): vibrating spans stretch and stiffen
+        level 2's own strings, so that the meshing would seem to fall back below the line
+        where level 3's spans bow beyond it (module docstring, "span modes beyond level 2's");
+        and keeps (the spans' mean tension sum, the rigid chain's [N], both means over the
+        samples) when the first is VIBRATION_RATIO times the second and above it by
+        VIBRATION_FLOOR of the breaking load, or with the meshing within LOCK_BAND of the
+        string frequency at its own mean (the lock's signature: the string's own stretch has
+        tuned it onto the meshing). A verdict that fired stays (a warning is not taken back,
+        as in the FMU's log)."""
         if not samples or periods < SPAN_JUDGE_PERIODS:
             return
         if self.level > 2:
             return
         speed, slack = speed_sum / samples, slack_sum / samples
         f_m, f_1 = self._frequencies(speed, slack)
+        line, judged = SPAN_MODE_SHARE, (f_1, slack, None)
         if self.level == 2:
             total = (tight_sum + slack_sum) / samples
             rigid = rigid_sum / samples
@@ -827,11 +848,29 @@ class Monitor:
                     self._vibration_floor is not None and total - rigid > self._vibration_floor
                     or locked):
                 self._vibration = (total, rigid)
+            line = LEVEL2_SPAN_MODE_RATIO
+            if self._span_found is None and f_m < line * f_1:
+                still = self._still_slack(speed, load_sum / samples)
+                if still < slack:
+                    judged = (self._frequencies(speed, still)[1], still, slack)
         if self._hanging is None:
             self._hanging = self._slack_hanging(slack)
-        line = LEVEL2_SPAN_MODE_RATIO if self.level == 2 else SPAN_MODE_SHARE
-        if f_m > 0.0 and f_m >= line * f_1:
-            self._span_found = (f_m, f_1, slack)
+        if f_m > 0.0 and f_m >= line * judged[0]:
+            self._span_found = (f_m,) + judged
+
+    def _still_slack(self, speed, load) -> float:
+        """The slack span's tension [N] where the spans do not vibrate, at mean |driver speed|
+        ``speed`` [rad/s] and mean load torque ``load`` [N m]: level 0's quasi-static split
+        (:meth:`~chainmodel.models.kinematic.KinematicModel.quasi_static_spans`) of |load +
+        driven.damping x driven speed|, plus the centrifugal tension."""
+        if self._still is None:
+            from .models.kinematic import KinematicModel, centrifugal_tension
+            self._still = (KinematicModel(self.drive, self.params),
+                           self.params["driven.damping"] * self.drive.tooth_ratio,
+                           float(centrifugal_tension(self.drive, self.params, 1.0)))
+        model, damping, centrifugal = self._still
+        held = abs(load + damping * speed)
+        return float(model.quasi_static_spans(held)[1]) + centrifugal * speed * speed
 
     def _frequencies(self, speed, slack) -> tuple[float, float]:
         """(meshing frequency, the slack span's first string frequency) [Hz] at mean |driver
@@ -884,20 +923,26 @@ class Monitor:
             return None
         return weight, slack, static
 
-    def _span_line(self, f_m, f_1, slack, share) -> tuple[str, float]:
+    def _span_line(self, f_m, f_1, slack, share, own=None) -> tuple[str, float]:
         """The span-modes warnings' shared parts: where the meshing f_m lies against the slack
-        span's first string mode f_1 (the line at ``share`` x f_1), and the input speed [rpm]
-        below the line, rounded down so that the speed printed is below it."""
-        where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz at its "
-                 f"mean {slack:.4g} N; warned from {share:g} x)" if f_1 > 0.0
-                 else f"above every string mode of the slack span, whose mean {slack:.4g} N is "
-                 "no more than its centrifugal tension")
+        span's first string mode f_1 at tension ``slack`` (the line at ``share`` x f_1; ``own``
+        the level's own mean where ``slack`` is the spans' still tension), and the input speed
+        [rpm] below the line, rounded down so that the speed printed is below it."""
+        at = (f"at its mean {slack:.4g} N" if own is None else
+              f"at the {slack:.4g} N its spans hold where they do not vibrate; level 2's own "
+              f"mean, {own:.4g} N, is its vibration's stretch, which stiffens its own strings")
+        where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz {at}; "
+                 f"warned from {share:g} x)" if f_1 > 0.0
+                 else f"above every string mode of the slack span, whose "
+                 + (f"mean {slack:.4g} N" if own is None else
+                    f"tension where the spans do not vibrate, {slack:.4g} N,")
+                 + " is no more than its centrifugal tension")
         return where, math.floor(600.0 * share * f_1 / self.drive.n_driver) / 10.0
 
-    def _beyond_level2(self, f_m, f_1, slack) -> Problem:
+    def _beyond_level2(self, f_m, f_1, slack, own) -> Problem:
         """Level 2's span-modes warning: the meshing reaches string modes it does not hold."""
         n = int(self.params["modal.modes"])
-        where, below = self._span_line(f_m, f_1, slack, LEVEL2_SPAN_MODE_RATIO)
+        where, below = self._span_line(f_m, f_1, slack, LEVEL2_SPAN_MODE_RATIO, own)
         return Problem("span_modes_beyond", (
             f"level 2 holds {n} string mode{'s' if n > 1 else ''} per span "
             f"(modal.modes), and the meshing ({f_m:.4g} Hz) is {where}: where the spans bow "
@@ -910,7 +955,9 @@ class Monitor:
             f"-6 % with three, +66 % with nine; docs/reduced_models.md, \"Level 2 beyond its "
             f"modes\" and \"Level 2's spans locked on the meshing\"); check against "
             f"fidelity 3"
-            + (f", or run below {below:g} rpm" if below >= 1.0 else "")))
+            + (f", or run below {below:g} rpm" if below >= 1.0 else "")
+            + (", or give the chain more static tension (its string modes rise with it)"
+               if own is not None else "")))
 
     def _transient(self, peak: float) -> str:
         """The breaking-load warning's last clause where ``peak`` [N] is more than
@@ -989,7 +1036,7 @@ class Monitor:
         if found is not None and self.level == 2:
             out.append(self._beyond_level2(*found))
         elif found is not None:
-            f_m, f_1, slack = found
+            f_m, f_1, slack, _ = found
             where, below = self._span_line(f_m, f_1, slack, SPAN_MODE_SHARE)
             out.append(Problem("span_modes_missing", (
                 f"level {self.level} has no span modes, and the meshing ({f_m:.4g} Hz) is "
