@@ -22,6 +22,8 @@
  *      some hosts abort the whole process on fmi2Fatal;
  *    - fmi2DoStep before fmi2ExitInitializationMode or after fmi2Terminate is refused with
  *      fmi2Error and a logged message (the state machine of section 4.2.4); pythonfmu steps.
+ *    Its log line for an exception, whose text 0.7 never fetches ("unknown error"), is
+ *    replaced by one naming the call and pointing at the error logged before it.
  *
  * Exit. pythonfmu 0.7's binary releases its interpreter guard twice at process exit (its static
  * std::shared_ptr's destructor, then its ELF destructor calling finalizePythonInterpreter on the
@@ -366,17 +368,34 @@ static enum phase phase_of_state(Instance *in, fmi2FMUstate state, int forget)
     return UNKNOWN;
 }
 
+/* pythonfmu 0.7 logs a Python exception leaving the FMU's code as this prefix, "[call]
+ * C function", a newline and the exception's repr, or "unknown error" where it fetched none (it
+ * releases the instance's objects before fetching, and 0.7 as shipped fetches nothing) */
+static const char PY_EXCEPTION[] = "Fatal py exception encountered: ";
+static const char PY_UNKNOWN[] = "unknown error";
+
 /* The backend's logger calls, with fmi2Fatal logged as fmi2Error. pythonfmu passes the message
- * as the format and no arguments; it is forwarded the same way. */
+ * as the format and no arguments; it is forwarded the same way, but for its exception line
+ * without the exception's text, which says which call failed and where the reason is. */
 static void backend_logger(fmi2ComponentEnvironment env, fmi2String instanceName,
                            fmi2Status status, fmi2String category, fmi2String message, ...)
 {
     Instance *in = (Instance *)env;
-    if (in->host.logger)
-        in->host.logger(in->host.componentEnvironment, instanceName,
-                        status == fmi2Fatal ? fmi2Error : status,
-                        status == fmi2Fatal && category == NULL ? "logStatusError" : category,
-                        message);
+    fmi2Status mended = status == fmi2Fatal ? fmi2Error : status;
+    fmi2String cat = status == fmi2Fatal && category == NULL ? "logStatusError" : category;
+    const char *call, *end;
+    if (!in->host.logger)
+        return;
+    if (message && strncmp(message, PY_EXCEPTION, sizeof PY_EXCEPTION - 1) == 0
+        && (end = strchr(call = message + sizeof PY_EXCEPTION - 1, '\n')) != NULL
+        && strcmp(end + 1, PY_UNKNOWN) == 0) {
+        in->host.logger(in->host.componentEnvironment, instanceName, mended, cat,
+                        FMU_NAME ": its Python code raised an exception in %.*s; "
+                        "pythonfmu 0.7 passes on no text of it: the error logged before this one, "
+                        "if any, says why", (int)(end - call), call);
+        return;
+    }
+    in->host.logger(in->host.componentEnvironment, instanceName, mended, cat, message);
 }
 
 static void log_error(Instance *in, const char *fmt, ...)
