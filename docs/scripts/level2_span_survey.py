@@ -18,6 +18,10 @@ and which of them are warned.
     python docs/scripts/level2_span_survey.py pretension
     python docs/scripts/level2_span_survey.py pretension --spans
     python docs/scripts/level2_span_survey.py pretension --spans --level 1
+    python docs/scripts/level2_span_survey.py pretension --spans --loaded
+
+``--loaded`` loads each drive to its static tension (load torque T0 r_o, T0 level 0's static
+tension, as docs/scripts/auto_audit.py ``--new-drives`` does; twenty-ninth session).
 
 ``--spans`` prints instead each span's error of level 2 against level 3 (tight / slack, means
 over 0.6-1 s), the rows sorted by fm/f1, each marked where it fails the criterion the span-modes
@@ -42,6 +46,7 @@ import numpy as np
 import chainmodel
 from chainmodel.new_scene import scene_text
 from chainmodel.models.limits import drive_string_frequency
+from chainmodel.scene import load_scene
 from chainmodel.validity import Monitor
 
 CHAINS = ("08A", "08B", "10B", "12B", "12A", "16B")
@@ -73,7 +78,7 @@ def run(path, level, spans=None):
     return total, float(np.mean(rigid)), [p.code for p in r.problems], f_m / f_1
 
 
-def main(which, per_span=False, level=2):
+def main(which, per_span=False, level=2, loaded=False):
     static = 0.0 if which == "none" else None
     folder = tempfile.mkdtemp()
     rows = []
@@ -88,6 +93,12 @@ def main(which, per_span=False, level=2):
                 with open(path, "w") as f:
                     f.write(scene_text(z1, z2, rpm, 0.0, chain=chain, links=links,
                                        static_tension=static, duration=1.0))
+                if loaded:
+                    sc0 = load_scene(path, fidelity=0)
+                    load = sc0.model().static_tension() * sc0.drive.driven.pitch_radius
+                    with open(path, "w") as f:
+                        f.write(scene_text(z1, z2, rpm, round(load, 3), chain=chain,
+                                           links=links, static_tension=static, duration=1.0))
                 means = {}
                 try:
                     s2, g2, codes, share = run(path, level, means)
@@ -143,10 +154,10 @@ if __name__ == "__main__":
         del argv[i:i + 2]
         if level not in (0, 1, 2):
             sys.exit(f"--level must be 0, 1 or 2 (compared with level 3), got {level}")
-    args = [a for a in argv if a != "--spans"] or ["none"]
+    args = [a for a in argv if a not in ("--spans", "--loaded")] or ["none"]
     if args[0] not in ("none", "pretension"):
         sys.exit(f"unknown case {args[0]!r}; choose none or pretension")
     if level != 2 and "--spans" not in argv:
         sys.exit("--level 0 or 1 goes with --spans (the span-sum table is level 2's)")
-    main(args[0], "--spans" in argv, level)
+    main(args[0], "--spans" in argv, level, "--loaded" in argv)
     print(f"wall {time.perf_counter() - start:.0f} s")
