@@ -28,8 +28,8 @@ figures against a converged level-3 reference. :func:`choose`
    on a drive that is not a measured scene, the configurations of levels 0-2 whose meshing
    lies at or above the line from which their level warns that its spans miss string modes
    (:data:`SPAN_LINES`, below) are passed over where a level 0-2 below its own line meets the
-   target: their table error does not carry over to this drive (on the `--new-drives` audit
-   of docs/tradeoff.md, the 17 drives where this changes the choice read the tight span 4-88 %
+   target: their table error does not carry over to this drive (on the audits' drives of
+   docs/tradeoff.md, the 17 where this changes the choice read the tight span 4-88 %
    off level 3's band with the cheaper level, 2-44 % with the level 2 taken in its place;
    level 3 is not taken for that alone);
 4. **promises** that error (the largest over those neighbouring scenes) only when the answer
