@@ -579,8 +579,8 @@ class Monitor:
         # the span-vibration check's floor (VIBRATION_FLOOR): without a breaking load (a pitch
         # no ISO 606 chain has, no chain.breaking_load) only the lock's signature (LOCK_BAND)
         self._vibration_floor = None if bl is None else VIBRATION_FLOOR * bl[0]
-        self._rigid = None          # rigid_sum's constants, when first needed
-        self._still = None          # _still_slack's model and constants, when first needed
+        self._rigid = None          # _rigid_constants, when first needed
+        self._still = None          # _still_slack's level-0 model, when first needed
         self._input_last = None     # (time, input speed) of the last sample: its acceleration
 
     # -- sample by sample --------------------------------------------------------------------
@@ -864,13 +864,12 @@ class Monitor:
         (:meth:`~chainmodel.models.kinematic.KinematicModel.quasi_static_spans`) of |load +
         driven.damping x driven speed|, plus the centrifugal tension."""
         if self._still is None:
-            from .models.kinematic import KinematicModel, centrifugal_tension
-            self._still = (KinematicModel(self.drive, self.params),
-                           self.params["driven.damping"] * self.drive.tooth_ratio,
-                           float(centrifugal_tension(self.drive, self.params, 1.0)))
-        model, damping, centrifugal = self._still
-        held = abs(load + damping * speed)
-        return float(model.quasi_static_spans(held)[1]) + centrifugal * speed * speed
+            from .models.kinematic import KinematicModel
+            self._still = KinematicModel(self.drive, self.params)
+        _, _, damping, _, centrifugal2, _ = self._rigid_constants()
+        held = abs(load + damping * self.drive.tooth_ratio * speed)
+        return (float(self._still.quasi_static_spans(held)[1])
+                + 0.5 * centrifugal2 * speed * speed)
 
     def _frequencies(self, speed, slack) -> tuple[float, float]:
         """(meshing frequency, the slack span's first string frequency) [Hz] at mean |driver
@@ -890,6 +889,18 @@ class Monitor:
         the spans: on a 16B 17/34 drive of steel-disc sprockets ramped to 600 rpm in 0.05 s,
         47 N m, 340 N of tension difference); the polygon's speed ripple, whose mean over a
         tooth period is nil, is left out."""
+        static2, hang2, damping, inv_r, centrifugal2, inertia = (self._rigid
+                                                                 or self._rigid_constants())
+        held = (abs(load + damping * driven_speed + inertia * input_acceleration) * inv_r
+                + hang2)
+        # builtins for one sample (the FMU's every step: numpy's ufuncs on floats cost ~1 us)
+        held = np.maximum(static2, held) if isinstance(held, np.ndarray) else max(static2, held)
+        return held + centrifugal2 * driver_speed * driver_speed
+
+    def _rigid_constants(self) -> tuple:
+        """(2 x static tension, 2 x hanging tension, driven.damping, 1 / R_o, both spans'
+        centrifugal tension per (rad/s)^2 of driver speed, driven.inertia x z1 / z2), when
+        first needed (:meth:`rigid_sum`, :meth:`_still_slack`)."""
         if self._rigid is None:
             from .models.kinematic import centrifugal_tension
             from .models.span_sag import hanging_tension
@@ -899,12 +910,7 @@ class Monitor:
                            p["driven.damping"], 1.0 / d.driven.pitch_radius,
                            2.0 * float(centrifugal_tension(d, p, 1.0)),
                            p["driven.inertia"] * d.tooth_ratio)
-        static2, hang2, damping, inv_r, centrifugal2, inertia = self._rigid
-        held = (abs(load + damping * driven_speed + inertia * input_acceleration) * inv_r
-                + hang2)
-        # builtins for one sample (the FMU's every step: numpy's ufuncs on floats cost ~1 us)
-        held = np.maximum(static2, held) if isinstance(held, np.ndarray) else max(static2, held)
-        return held + centrifugal2 * driver_speed * driver_speed
+        return self._rigid
 
     def _slack_hanging(self, slack):
         """(weight of the slack span [N], its mean tension ``slack``, the static tension) where
@@ -933,7 +939,7 @@ class Monitor:
               f"mean, {own:.4g} N, is its vibration's stretch, which stiffens its own strings")
         where = (f"{f_m / f_1:.3g} x the slack span's first string mode ({f_1:.4g} Hz {at}; "
                  f"warned from {share:g} x)" if f_1 > 0.0
-                 else f"above every string mode of the slack span, whose "
+                 else "above every string mode of the slack span, whose "
                  + (f"mean {slack:.4g} N" if own is None else
                     f"tension where the spans do not vibrate, {slack:.4g} N,")
                  + " is no more than its centrifugal tension")

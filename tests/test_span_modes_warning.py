@@ -24,11 +24,14 @@ from chainmodel.validity import SPAN_MODE_SHARE
 CODE_TEXT = "has no span modes"
 
 
-def _first_string_mode(name: str, slack: float, rpm: float) -> float:
-    d = load_scene(name).drive
+def _first_string_mode(scene, slack: float, rpm: float) -> float:
+    """f_1 [Hz] of the slack span at tension ``slack`` (module docstring); ``scene`` a scene
+    object, or a preset or scene file loaded here."""
+    sc = load_scene(scene) if isinstance(scene, str) else scene
+    d = sc.drive
     r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
     length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
-    rho = load_scene(name).parameters["chain.link_mass"] / d.pitch
+    rho = sc.parameters["chain.link_mass"] / d.pitch
     c2 = slack / rho
     v = d.n_driver * d.pitch * rpm / 60.0
     return (c2 - v * v) / (2.0 * length * math.sqrt(c2))
@@ -224,15 +227,6 @@ AUDIT_08A = dict(chain="08A", drive_pitch=0.0127, drive_driver_teeth=9, drive_dr
                  duration=1.0)
 
 
-def _scene_first_string_mode(scene, slack: float, rpm: float) -> float:
-    """:func:`_first_string_mode` of a scene object (the same formula, here again)."""
-    d, rho = scene.drive, scene.parameters["chain.link_mass"] / scene.drive.pitch
-    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
-    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
-    v = d.n_driver * d.pitch * rpm / 60.0
-    return (slack / rho - v * v) / (2.0 * length * math.sqrt(slack / rho))
-
-
 def test_level2_judges_its_line_where_its_spans_do_not_vibrate():
     """The audit's 08A drive at 450 rpm: level 2's spans lock on the meshing, and their stretch
     lifts its own slack span so far that the meshing at its own mean lies below the line
@@ -252,15 +246,15 @@ def test_level2_judges_its_line_where_its_spans_do_not_vibrate():
     assert tight[2] > 1.03 * tight[3] and slack[2] > 1.06 * slack[3], (tight, slack)
     sc = runs[2].scene
     f_m = sc.drive.n_driver * 450.0 / 60.0
-    own = f_m / _scene_first_string_mode(sc, slack[2], 450.0)
+    own = f_m / _first_string_mode(sc, slack[2], 450.0)
     assert own < LEVEL2_SPAN_MODE_RATIO / 1.1, own
-    assert f_m / _scene_first_string_mode(sc, slack[3], 450.0) > LEVEL2_SPAN_MODE_RATIO, slack
+    assert f_m / _first_string_mode(sc, slack[3], 450.0) > LEVEL2_SPAN_MODE_RATIO, slack
     warned = [p.message for p in runs[2].problems if p.code == "span_modes_beyond"]
     assert len(warned) == 1
     named = float(re.search(r"at the ([\d.]+) N its spans hold where they do not vibrate",
                             warned[0]).group(1))
     assert named < slack[3]
-    assert f_m / _scene_first_string_mode(sc, named, 450.0) >= LEVEL2_SPAN_MODE_RATIO
+    assert f_m / _first_string_mode(sc, named, 450.0) >= LEVEL2_SPAN_MODE_RATIO
     r = runs[2]
     names = [o.name for o in ALL_OUTPUTS if o.name in r.names]
     mon = Monitor(sc.drive, sc.parameters, 2, names)

@@ -191,6 +191,15 @@ _EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 _UNSEEN = Path(__file__).resolve().parents[1] / "docs" / "scripts" / "unseen_drives"
 
 
+def _taut_string_mode(scene, tension: float) -> float:
+    """The first mode [Hz] of a span as a taut string at ``tension`` [N], sqrt(T / rho) / 2l,
+    l the common tangent of the two pitch circles (R = p / (2 sin(pi / z)))."""
+    d = scene.drive
+    rho = scene.parameters["chain.link_mass"] / d.pitch
+    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
+    return math.sqrt(tension / rho) / (2.0 * math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2))
+
+
 @pytest.mark.parametrize("scene_kw, outputs, accuracy", [
     # an unseen 16B 21/21 drive (a 1:1 ratio the table does not hold) at 150 rpm
     ((str(_UNSEEN / "16b_21_21.toml"), dict(input_speed_rpm=150, duration=0.6)),
@@ -216,11 +225,7 @@ def test_auto_does_not_promise_span_tensions_where_its_level_warns_of_missing_sp
                for r in auto.table())
     choice = auto.choose(sc, outputs, accuracy)
     d = sc.drive
-    rho = sc.parameters["chain.link_mass"] / d.pitch
-    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
-    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
-    t0 = sc.with_overrides(fidelity=0).model().static_tension()
-    f_1 = math.sqrt(t0 / rho) / (2.0 * length)
+    f_1 = _taut_string_mode(sc, sc.with_overrides(fidelity=0).model().static_tension())
     f_m = d.n_driver * kw["input_speed_rpm"] / 60.0
     assert choice.level == 1 and choice.met and f_m > 2.0 * 0.4 * f_1, (f_m, f_1)
     assert not choice.promised and "miss string modes" in choice.why_not
@@ -265,11 +270,7 @@ def test_auto_prefers_a_level_that_holds_the_spans_string_modes(tmp_path):
     path.write_text(scene_text(11, 33, 200.0, round(t0 * sc0.drive.driven.pitch_radius, 3),
                                chain="16B", links=44, duration=0.33))
     sc = load_scene(str(path))
-    d = sc.drive
-    rho = sc.parameters["chain.link_mass"] / d.pitch
-    r1, r2 = (d.pitch / (2.0 * math.sin(math.pi / z)) for z in (d.n_driver, d.n_driven))
-    length = math.sqrt(d.centre_distance ** 2 - (r2 - r1) ** 2)
-    ratio = (d.n_driver * 200.0 / 60.0) / (math.sqrt(t0 / rho) / (2.0 * length))
+    ratio = (sc.drive.n_driver * 200.0 / 60.0) / _taut_string_mode(sc, t0)
     assert SPAN_MODE_SHARE < ratio < LEVEL2_SPAN_MODE_RATIO, ratio
     figures = auto.OUTPUT_FIGURES["tight_span.tension"]
     choice = auto.choose(sc, ["tight_span.tension"], 0.2)
