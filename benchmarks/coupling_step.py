@@ -37,8 +37,8 @@ class Slave:
         self.folder = extract(str(path))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.types = {v.name: v.type for v in md.modelVariables}
-        from chainmodel.fmu import _Log
-        self.logger = _Log()
+        from chainmodel.fmu_log import FMULog
+        self.logger = FMULog()
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=self.folder, instanceName=name,
                              modelIdentifier=md.coSimulation.modelIdentifier)
         self.fmu.instantiate(callbacks=self.logger.callbacks, loggingOn=True)

@@ -18,6 +18,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .fmu_log import FMULog
+
 __all__ = ["simulate_fmu", "FMUSession", "FMUError", "reference_scene", "variables_table",
            "update_doc_table", "differing_files"]
 
@@ -34,41 +36,6 @@ def reference_scene():
     (ramp to 120 rpm over 0.05 s, 43.2 N.m load), sampled every 1 ms."""
     from .scene import Scene
     return Scene.from_preset("xu2010", fidelity=0, duration=0.2, output_interval=1e-3)
-
-
-class _Log:
-    """fmpy logger callbacks that keep the FMU's messages (and optionally pass them on)."""
-
-    LABELS = ("OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING")
-
-    def __init__(self, echo: Callable[[str], None] | None = None):
-        from ctypes import byref
-
-        from fmpy.fmi1 import calloc, free
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        self.messages: list[tuple[int, str]] = []
-        self.echo = echo
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(self._log)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:  # formats the printf-style message the FMU passes
-            from fmpy.logging import addLoggerProxy
-            addLoggerProxy(byref(cb))
-        except Exception:  # pragma: no cover - fmpy without the proxy library
-            pass
-        self.callbacks = cb
-
-    def _log(self, env, instance, status, category, message):
-        text = message.decode("utf-8", "replace") if isinstance(message, bytes) else str(message)
-        self.messages.append((int(status), text))
-        if self.echo:
-            self.echo(f"[{self.LABELS[status] if 0 <= status < 6 else status}] {text}")
-
-    def problems(self, since: int = 0) -> str:
-        msgs = [m for s, m in self.messages[since:] if s >= 1]
-        return "; ".join(msgs) if msgs else "the FMU logged no reason"
 
 
 _EXTRACTED: dict[tuple, str] = {}
@@ -170,7 +137,7 @@ class FMUSession:
                              "`python build_fmu.py`")
         self.md = read_model_description(str(self.path))
         self.by_name, self.outputs = _value_refs(self.md)
-        self.logger = _Log(log)
+        self.logger = FMULog(log)
         self.unzipdir = str(unzipdir) if unzipdir is not None else _extracted(self.path)
         self.fmu = None
         self._used = False

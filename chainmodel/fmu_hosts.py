@@ -18,7 +18,8 @@ The call sequence is libcosim's fixed-step one, reproduced call for call with fm
 API::
 
     run_fmu(fmu, host="fmpy"|"libcosim", *, stop_time, step_size, inputs=None,
-            start_values=None, outputs=None) -> HostRun(host, version, time, outputs)
+            start_values=None, outputs=None) -> HostRun(host, version, time, outputs,
+                                                      messages)
     host_versions() -> {"fmpy": "0.3.32", "libcosim": "0.0.6" or None if not importable}
     grid(stop_time, step_size) -> (times, step_ns)
 
@@ -28,7 +29,6 @@ function of time; ``outputs`` names the outputs to return (default: every output
 
 from __future__ import annotations
 
-import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,6 +52,8 @@ class HostRun:
     version: str
     time: np.ndarray                      # communication points [s]
     outputs: dict[str, np.ndarray]        # output name -> value at each point
+    #: (status, message) the FMU logged, fmpy only (libcosim prints its instances' messages)
+    messages: tuple[tuple[int, str], ...] = ()
 
 
 def host_versions() -> dict[str, str | None]:
@@ -136,8 +138,9 @@ def run_fmu(fmu: str | Path, host: str = "fmpy", *, stop_time: float, step_size:
     start_values = dict(start_values or {})
     md, by_name, names = _variables(fmu, table, start_values, outputs)
     run = _run_fmpy if host == "fmpy" else _run_libcosim
-    data = run(fmu, md, by_name, names, times, step_ns, table, start_values)
-    return HostRun(host, version, times, {n: data[:, k].copy() for k, n in enumerate(names)})
+    data, messages = run(fmu, md, by_name, names, times, step_ns, table, start_values)
+    return HostRun(host, version, times, {n: data[:, k].copy() for k, n in enumerate(names)},
+                   tuple(messages))
 
 
 # --- the master loop, one for every host -----------------------------------------------------
@@ -241,8 +244,12 @@ def _typed(by_name, values: Mapping[str, Any]) -> dict[str, tuple[list, list]]:
 
 def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> np.ndarray:
     from fmpy import extract
+    from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import FMU2Slave
+
+    from .fmu_log import FMULog
     folder = extract(str(fmu))
+    log = FMULog()
     out_vr = [by_name[n].valueReference for n in names]
     in_vr = [by_name[n].valueReference for n in table]
     groups = _typed(by_name, start_values)
@@ -250,7 +257,7 @@ def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> n
     slave = FMU2Slave(guid=md.guid, unzipDirectory=folder,
                       modelIdentifier=md.coSimulation.modelIdentifier, instanceName="host_run")
     try:
-        slave.instantiate()
+        slave.instantiate(callbacks=log.callbacks)
         setters = {"Real": slave.setReal, "Integer": slave.setInteger,
                    "Boolean": slave.setBoolean, "String": slave.setString}
 
@@ -269,18 +276,21 @@ def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> n
         set_start()
         set_inputs(0)
         slave.getReal(out_vr)              # ... and after setting the initial values
-        slave.exitInitializationMode()
+        try:
+            slave.exitInitializationMode()
+        except FMICallException as exc:
+            raise RuntimeError(f"{exc}: {log.problems()}") from None
         data[0] = slave.getReal(out_vr)
         u = np.column_stack([table[n] for n in table]) if table else np.empty((len(times), 0))
         k = master_loop(FmpyBinding(slave, in_vr, out_vr), times, u, data, feedthrough=False)
         if k < len(times):
-            raise RuntimeError(f"fmpy step to t = {times[k]:.9g} s failed")
+            raise RuntimeError(f"fmpy step to t = {times[k]:.9g} s failed: {log.problems()}")
         slave.terminate()
     finally:
         if slave.component is not None:
             slave.freeInstance()
         shutil.rmtree(folder, ignore_errors=True)
-    return data
+    return data, log.messages
 
 
 def _run_libcosim(fmu, md, by_name, names, times, step_ns, table, start_values) -> np.ndarray:
@@ -323,7 +333,7 @@ def _run_libcosim(fmu, md, by_name, names, times, step_ns, table, start_values) 
     for j, vr in enumerate(out_vr):
         data[:, j] = _real_samples(observer, index, vr, len(times))
     execution.stop()
-    return data
+    return data, ()
 
 
 def _real_samples(observer, index: int, vr: int, count: int) -> np.ndarray:

@@ -44,13 +44,13 @@ class Slave:
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
-        from chainmodel.fmu import _Log
+        from chainmodel.fmu_log import FMULog
         md = read_model_description(str(path))
         self.md = md
         self.folder = extract(str(path))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         types = {v.name: v.type for v in md.modelVariables}
-        self.log = _Log()
+        self.log = FMULog()
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=self.folder, instanceName=name,
                              modelIdentifier=md.coSimulation.modelIdentifier)
         self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=True)

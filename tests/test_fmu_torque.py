@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from chainmodel.fmu import _Log
+from chainmodel.fmu_log import FMULog
 from chainmodel.integrate import make_stepper
 from chainmodel.models import ALL_OUTPUTS, Inputs
 from chainmodel.scene import drive_from_parameters, load_scene
@@ -34,7 +34,7 @@ def _slave(unzipdir, parameters):
     from fmpy.fmi2 import FMU2Slave
     md = read_model_description(str(unzipdir))
     var = {v.name: v for v in md.modelVariables}
-    log = _Log()
+    log = FMULog()
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipdir),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="torque")
     fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
