@@ -201,6 +201,22 @@ def test_c_host_under_env_i_gives_fmpys_outputs(master, chaindrive_fmu, chaindri
     assert np.all(np.diff(c_host[:, 1 + names.index("driver.angle")]) > 0)   # it turned
 
 
+def test_c_host_without_logging_hears_why_initialization_failed(master, chaindrive_fmu_dir,
+                                                               fmu_vars):
+    """The master instantiates with loggingOn = false (as many C tools do). A refused
+    initialization returns fmi2Error, and the reason reaches its logger: pythonfmu 0.7 alone
+    logs nothing then, the launcher passes warnings and errors on whatever loggingOn says."""
+    proc = run_master(master, chaindrive_fmu_dir, fmu_vars, 7, 1)
+    assert proc.returncode == 5, proc.stderr[-3000:]          # CHECK failed on a status > warning
+    assert "failed: fmi2ExitInitializationMode" in proc.stderr
+    errors = [line for line in proc.stderr.splitlines()
+              if line.startswith("FMI LOG c_master status 3 ")]
+    assert any("fidelity" in line and "got 7" in line for line in errors), proc.stderr[-3000:]
+    assert any("raised an exception in [exitInitializationMode]" in line for line in errors)
+    assert not any(line.startswith("FMI LOG c_master status 0 ")
+                   for line in proc.stderr.splitlines())
+
+
 def test_c_host_exits_cleanly_20_of_20(master, chaindrive_fmu_dir, fmu_vars):
     """20 processes, each 0.01 s at level 0 then fmi2Terminate, fmi2FreeInstance, dlclose,
     return from main: exit code 0, complete output, no heap-corruption message, no signal."""

@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 
 from chainmodel import parameters as P
-from chainmodel.fmu import _Log, simulate_fmu, reference_scene
+from chainmodel.fmu import simulate_fmu, reference_scene
+from chainmodel.fmu_log import FMULog
 from chainmodel.models import ALL_OUTPUTS, MODEL_CLASSES, Inputs
 from chainmodel.scene import Scene
 
@@ -41,16 +42,17 @@ RTOL = 1e-12
 class Slave:
     """One FMU instance through fmpy's low-level API, with its log captured."""
 
-    def __init__(self, unzipdir, parameters=None, start=0.0, inputs=(0.0, 0.0, 0.0)):
+    def __init__(self, unzipdir, parameters=None, start=0.0, inputs=(0.0, 0.0, 0.0),
+                 logging_on=True):
         from fmpy import read_model_description
         from fmpy.fmi2 import FMU2Slave
         self.md = read_model_description(str(unzipdir))
         self.var = {v.name: v for v in self.md.modelVariables}
-        self.log = _Log()
+        self.log = FMULog()
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipdir),
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName="test")
-        self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=True)
+        self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=logging_on)
         self.fmu.setupExperiment(startTime=start)
         self.fmu.enterInitializationMode()
         self.set_parameters(parameters or {})
@@ -437,6 +439,61 @@ def _initialization_error(unzipdir, parameters):
         return log
     finally:
         s.free()
+
+
+def test_a_host_without_logging_hears_the_errors_and_warnings_not_the_debug_lines(
+        chaindrive_fmu_dir):
+    """FMI 2.0's loggingOn (and fmi2SetDebugLogging) switches debug logging; the messages that
+    explain a non-OK status or a result outside the model's validity reach the host whatever
+    it says, as the Modelica Reference-FMUs log their errors. pythonfmu 0.7 forwards nothing
+    without loggingOn, errors included; the launcher asks it for everything and filters."""
+    from fmpy.fmi1 import FMICallException
+    s = Slave(chaindrive_fmu_dir, {"drive.driver_teeth": 2}, logging_on=False)
+    try:
+        with pytest.raises(FMICallException):
+            s.fmu.exitInitializationMode()
+        assert {status for status, _ in s.log.messages} == {3}
+        log = s.messages()
+        assert "drive.driver_teeth" in log and "raised an exception in" in log
+    finally:
+        s.free()
+
+    def init_lines(logging_on, categories=None):
+        """The messages of a good initialization, debug logging as given."""
+        s = Slave(chaindrive_fmu_dir, {"fidelity": 0}, logging_on=logging_on)
+        try:
+            if categories is not None:
+                s.fmu.setDebugLogging(True, categories)
+            s.fmu.exitInitializationMode()
+            return s.log.messages
+        finally:
+            s.free()
+
+    # the FMU's one debug line at initialization names the level (category logAll)
+    def debug(messages):
+        return [m for status, m in messages if status == 0 and m.startswith("fidelity 0")]
+
+    assert debug(init_lines(True)) and not debug(init_lines(False))
+    assert debug(init_lines(False, ["logAll"]))
+    assert not debug(init_lines(False, ["logStatusError"]))
+
+
+def test_two_instances_alive_keep_their_own_messages(chaindrive_fmu_dir):
+    """fmpy's logger proxy passes every message of the process to one logger (the last given
+    to it); chainmodel.fmu_log.FMULog tells its instances apart by the component environment."""
+    from fmpy.fmi1 import FMICallException
+    bad = Slave(chaindrive_fmu_dir, {"drive.driver_teeth": 2})
+    good = Slave(chaindrive_fmu_dir, {"fidelity": 0})      # made last: the proxy's last logger
+    try:
+        with pytest.raises(FMICallException):
+            bad.fmu.exitInitializationMode()
+        good.fmu.exitInitializationMode()
+        assert "drive.driver_teeth" in bad.messages()
+        assert "drive.driver_teeth" not in good.messages() and "fidelity 0" in good.messages()
+        assert "fidelity 0" not in bad.messages()
+    finally:
+        bad.free()
+        good.free()
 
 
 def test_bad_parameter_fails_initialization_naming_it(chaindrive_fmu_dir):

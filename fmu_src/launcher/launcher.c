@@ -23,7 +23,10 @@
  *    - fmi2DoStep before fmi2ExitInitializationMode or after fmi2Terminate is refused with
  *      fmi2Error and a logged message (the state machine of section 4.2.4); pythonfmu steps.
  *    Its log line for an exception, whose text 0.7 never fetches ("unknown error"), is
- *    replaced by one naming the call and pointing at the error logged before it.
+ *    replaced by one naming the call and pointing at the error logged before it. And
+ *    pythonfmu forwards no message without loggingOn, errors included: the backend is
+ *    instantiated with logging on, and the launcher passes on warnings, discards and errors
+ *    always, the rest as the host's loggingOn and fmi2SetDebugLogging categories say.
  *
  * Exit. pythonfmu 0.7's binary releases its interpreter guard twice at process exit (its static
  * std::shared_ptr's destructor, then its ELF destructor calling finalizePythonInterpreter on the
@@ -335,6 +338,10 @@ typedef struct {
                                          pointer to it: it lives as long as the instance) */
     char name[256];
     enum phase phase;
+    fmi2Boolean logging_on;           /* the host's debug logging (fmi2Instantiate's loggingOn,
+                                         then fmi2SetDebugLogging); the backend logs everything */
+    size_t n_categories;              /* and the categories it asked for, none: all */
+    char **categories;
     struct { fmi2FMUstate state; enum phase phase; } saved[SAVED_STATES];
 } Instance;
 
@@ -374,6 +381,24 @@ static enum phase phase_of_state(Instance *in, fmi2FMUstate state, int forget)
 static const char PY_EXCEPTION[] = "Fatal py exception encountered: ";
 static const char PY_UNKNOWN[] = "unknown error";
 
+/* Whether the host hears a message: warnings, discards and errors always (they explain a
+ * status, or a result outside the model's validity, as the Reference-FMUs log errors whatever
+ * loggingOn says); the rest with debug logging on, in the categories the host asked for. */
+static int heard(const Instance *in, fmi2Status status, fmi2String category)
+{
+    size_t i;
+    if (status >= fmi2Warning)
+        return 1;
+    if (!in->logging_on)
+        return 0;
+    if (in->n_categories == 0)
+        return 1;
+    for (i = 0; i < in->n_categories; i++)
+        if (category && strcmp(category, in->categories[i]) == 0)
+            return 1;
+    return 0;
+}
+
 /* The backend's logger calls, with fmi2Fatal logged as fmi2Error. pythonfmu passes the message
  * as the format and no arguments; it is forwarded the same way, but for its exception line
  * without the exception's text, which says which call failed and where the reason is. */
@@ -382,9 +407,10 @@ static void backend_logger(fmi2ComponentEnvironment env, fmi2String instanceName
 {
     Instance *in = (Instance *)env;
     fmi2Status mended = status == fmi2Fatal ? fmi2Error : status;
-    fmi2String cat = status == fmi2Fatal && category == NULL ? "logStatusError" : category;
+    fmi2String cat = status == fmi2Fatal && (category == NULL || !*category) ? "logStatusError"
+                                                                             : category;
     const char *call, *end;
-    if (!in->host.logger)
+    if (!in->host.logger || !heard(in, mended, cat))
         return;
     if (message && strncmp(message, PY_EXCEPTION, sizeof PY_EXCEPTION - 1) == 0
         && (end = strchr(call = message + sizeof PY_EXCEPTION - 1, '\n')) != NULL
@@ -444,8 +470,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     in->to_backend.componentEnvironment = in;
     snprintf(in->name, sizeof in->name, "%s", instanceName ? instanceName : "");
     in->phase = INSTANTIATED;
+    in->logging_on = loggingOn;
+    /* pythonfmu forwards nothing, errors included, without loggingOn: it logs everything to
+     * the launcher, which passes on what the host asked for (heard) */
     in->backend = p_fmi2Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
-                                    &in->to_backend, visible, loggingOn);
+                                    &in->to_backend, visible, fmi2True);
     if (!in->backend) {
         free(in);
         return NULL;
@@ -469,9 +498,43 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return s_; \
     } while (0)
 
+static void forget_categories(Instance *in)
+{
+    size_t i;
+    for (i = 0; i < in->n_categories; i++)
+        free(in->categories[i]);
+    free(in->categories);
+    in->categories = NULL;
+    in->n_categories = 0;
+}
+
+/* kept here, not passed on: the backend keeps logging everything to backend_logger */
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
                                const fmi2String categories[])
-{ CALL(fmi2SetDebugLogging, c, on, n, categories); }
+{
+    size_t i;
+    if (!c)
+        return fmi2Error;
+    if (n > 0 && !categories) {
+        log_error(IN, "fmi2SetDebugLogging: nCategories = %zu but categories is NULL", n);
+        return fmi2Error;
+    }
+    forget_categories(IN);
+    IN->logging_on = on;
+    if (n == 0)
+        return fmi2OK;
+    IN->categories = (char **)calloc(n, sizeof *IN->categories);
+    for (i = 0; IN->categories && i < n; i++)
+        if (!categories[i] || !(IN->categories[IN->n_categories++] = strdup(categories[i])))
+            break;
+    if (!IN->categories || i < n) {
+        forget_categories(IN);
+        log_error(IN, "fmi2SetDebugLogging: category %zu is NULL or out of memory; debug logging "
+                  "stays on for all categories", i);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
 
 void fmi2FreeInstance(fmi2Component c)
 {
@@ -479,6 +542,7 @@ void fmi2FreeInstance(fmi2Component c)
         return;
     if (p_fmi2FreeInstance)
         p_fmi2FreeInstance(IN->backend);
+    forget_categories(IN);
     free(c);
 }
 
