@@ -501,6 +501,29 @@ def test_bad_parameter_fails_initialization_naming_it(chaindrive_fmu_dir):
     assert "drive.driver_teeth" in log and "2" in log
 
 
+def test_after_a_refused_initialization_reset_gives_a_fresh_instance(chaindrive_fmu_dir):
+    """FMI 2.0 section 2.1.3: after fmi2Error the instance may be reset (or freed). pythonfmu
+    releases its Python objects after an exception; the reset instance must start from the
+    model description's start values, not from the refused ones, and run."""
+    from fmpy.fmi1 import FMICallException
+    s = Slave(chaindrive_fmu_dir, {"drive.driver_teeth": 2})
+    try:
+        teeth = s.var["drive.driver_teeth"]
+        with pytest.raises(FMICallException):
+            s.fmu.exitInitializationMode()
+        s.fmu.reset()
+        assert s.fmu.getInteger([teeth.valueReference]) == [int(teeth.start)]
+        s.fmu.setupExperiment(startTime=0.0)
+        s.fmu.enterInitializationMode()
+        s.set_parameters({"fidelity": 0})
+        s.set_inputs(0.0, 1.0, 0.0)
+        s.fmu.exitInitializationMode()
+        s.fmu.doStep(0.0, 1e-3)
+        assert np.all(np.isfinite(s.outputs()))
+    finally:
+        s.free()
+
+
 def test_bad_real_parameter_fails_initialization_naming_it(chaindrive_fmu_dir):
     log = _initialization_error(chaindrive_fmu_dir, {"drive.pitch": -0.01})
     assert "drive.pitch" in log
