@@ -477,6 +477,16 @@ def test_a_host_without_logging_hears_the_errors_and_warnings_not_the_debug_line
     assert debug(init_lines(False, ["logAll"]))
     assert not debug(init_lines(False, ["logStatusError"]))
 
+    # fmi2SetDebugLogging(c, true, 1, NULL) is the host's error: refused and said, not a crash
+    s = Slave(chaindrive_fmu_dir, {"fidelity": 0}, logging_on=False)
+    try:
+        with pytest.raises(FMICallException) as err:
+            s.fmu.fmi2SetDebugLogging(s.fmu.component, 1, 1, None)
+        assert err.value.status == 3
+        assert "nCategories = 1 but categories is NULL" in s.messages()
+    finally:
+        s.free()
+
 
 def test_two_instances_alive_keep_their_own_messages(chaindrive_fmu_dir):
     """fmpy's logger proxy passes every message of the process to one logger (the last given
