@@ -242,7 +242,8 @@ def _typed(by_name, values: Mapping[str, Any]) -> dict[str, tuple[list, list]]:
     return groups
 
 
-def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> np.ndarray:
+def _run_fmpy(fmu, md, by_name, names, times, step_ns, table,
+              start_values) -> tuple[np.ndarray, list]:
     from fmpy import extract
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import FMU2Slave
@@ -293,7 +294,8 @@ def _run_fmpy(fmu, md, by_name, names, times, step_ns, table, start_values) -> n
     return data, log.messages
 
 
-def _run_libcosim(fmu, md, by_name, names, times, step_ns, table, start_values) -> np.ndarray:
+def _run_libcosim(fmu, md, by_name, names, times, step_ns, table,
+                  start_values) -> tuple[np.ndarray, tuple]:
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level

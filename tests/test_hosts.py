@@ -60,3 +60,18 @@ def test_unknown_host_and_variables_are_refused(chaindrive_fmu):
     if VERSIONS["libcosim"] is None:
         with pytest.raises(HostUnavailable, match="pip install libcosimpy"):
             run_fmu(chaindrive_fmu, "libcosim", **RUN)
+
+
+def test_an_fmpy_run_keeps_the_fmus_messages_and_names_them_when_it_fails(chaindrive_fmu):
+    """The fmpy path instantiates without loggingOn, as libcosim does; the FMU's warnings and
+    errors reach it all the same (docs/fmu.md, "Log messages"): a refused initialization is
+    raised with the FMU's reason, and a run's warnings are kept in HostRun.messages."""
+    with pytest.raises(RuntimeError, match="fidelity must be 0-3"):
+        run_fmu(chaindrive_fmu, "fmpy", stop_time=0.002, step_size=1e-3,
+                start_values={"fidelity": 7})
+    # a speed without its angle: the driver jumps by the angle the speed implies, and the FMU
+    # warns once (docs/fmu.md, "The angle input")
+    run = run_fmu(chaindrive_fmu, "fmpy", stop_time=0.003, step_size=1e-3,
+                  start_values={"fidelity": 0}, inputs={"input_shaft.speed": 10.0})
+    assert [status for status, _ in run.messages] == [1]
+    assert "input_shaft.angle jumped" in run.messages[0][1]

@@ -530,7 +530,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
     if (!IN->categories || i < n) {
         forget_categories(IN);
         log_error(IN, "fmi2SetDebugLogging: category %zu is NULL or out of memory; debug logging "
-                  "stays on for all categories", i);
+                  "is %s for all categories", i, on ? "on" : "off");
         return fmi2Error;
     }
     return fmi2OK;
