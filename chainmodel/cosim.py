@@ -263,7 +263,7 @@ class CosimSession:
         if st is not None and self.torque_causal:
             return tuple(float(v) for v in st.model.motor_outputs(st.x))
         if st is not None and not fresh:
-            return st.inputs.angle, st.inputs.speed
+            return st.held_angle_speed()      # (an Inputs built every step cost 0.5-0.9 us)
         return self.model_angle(), self.speed
 
     def model_angle(self) -> float:
